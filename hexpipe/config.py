@@ -1,0 +1,269 @@
+"""Typed, validated configuration for every stage.
+
+`load_params` is called once, by the CLI; everything below it receives the typed sections. Errors are
+`ConfigError` with one line naming the key at fault and what is allowed.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Annotated, Any, Literal
+
+import yaml
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+
+Triple = tuple[float, float, float]
+PositiveInt = Annotated[int, Field(ge=1)]
+PositiveFloat = Annotated[float, Field(gt=0)]
+Fraction = Annotated[float, Field(ge=0, le=1)]
+
+
+class ConfigError(ValueError):
+    """A bad params file or override; the message is one line naming the key."""
+
+
+class _Section(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class SimConfig(_Section):
+    """Physics and low-level control."""
+
+    physics_hz: PositiveInt = 240  # PyBullet step rate (Hz)
+    control_hz: PositiveInt = 20  # policy / env step rate (Hz); physics_hz must be a multiple
+    friction: PositiveFloat = 1.0  # lateral friction of ground and feet
+    position_gain: PositiveFloat = 0.3  # PyBullet PD position gain (dimensionless, per joint motor)
+    velocity_gain: PositiveFloat = 1.0  # PyBullet PD velocity gain (dimensionless)
+    body_height: PositiveFloat = 0.24  # nominal base height above the stance plane (m)
+    stance_reach: PositiveFloat = 0.30  # horizontal distance from hip yaw axis to foot in stance (m)
+    lift_gain: PositiveFloat = 1.4  # shoulder lift (rad) per rad of the oscillator's y in swing
+
+    @model_validator(mode="after")
+    def _rates_divide(self) -> SimConfig:
+        if self.physics_hz % self.control_hz:
+            raise ValueError(f"control_hz={self.control_hz} must divide physics_hz={self.physics_hz}")
+        return self
+
+
+class CpgConfig(_Section):
+    """The limit-cycle CPG and the bounds on its parameters (a, b, omega).
+
+    a: fore/aft amplitude (rad of hip yaw); b: lift amplitude (rad of shoulder); omega: angular frequency (rad/s).
+    The policy sets the second derivative of (a, b, omega), integrated with the rate and value bounds below.
+    """
+
+    initial: Triple = (0.25, 0.15, 1.5 * math.pi)
+    lower: Triple = (0.05, 0.05, 0.5 * math.pi)
+    upper: Triple = (0.40, 0.50, 3.0 * math.pi)
+    rate_limit: Triple = (1.0, 1.0, 10.0)  # |d/dt (a, b, omega)| bound (rad/s, rad/s, rad/s^2)
+    accel_limit: Triple = (4.0, 4.0, 40.0)  # action 1.0 maps to this second derivative
+    convergence: PositiveFloat = 10.0  # pull-back gain onto the limit cycle (1/s)
+    coupling: PositiveFloat = 4.0  # tripod phase-locking gain (1/s)
+
+    @model_validator(mode="after")
+    def _bounds_ordered(self) -> CpgConfig:
+        for name, lo, hi, init in zip(("a", "b", "omega"), self.lower, self.upper, self.initial, strict=True):
+            if not 0 < lo <= init <= hi:
+                raise ValueError(f"{name}: need 0 < lower ({lo}) <= initial ({init}) <= upper ({hi})")
+        for name, value in (("rate_limit", self.rate_limit), ("accel_limit", self.accel_limit)):
+            if min(value) <= 0:
+                raise ValueError(f"{name} must be positive, got {value}")
+        return self
+
+
+Sensor = Literal["rgb", "heightmap"]
+
+
+class SensorConfig(_Section):
+    """Terrain sensors: a body camera looking ahead and down, and a body-centred height map ahead."""
+
+    camera_width: PositiveInt = 64  # pixels (the paper used 320x220)
+    camera_height: PositiveInt = 64
+    camera_fov_deg: Annotated[float, Field(gt=10, lt=170)] = 75.0
+    camera_pitch_deg: Annotated[float, Field(ge=0, le=90)] = 35.0  # looking down from horizontal
+    camera_mount: Triple = (0.30, 0.0, 0.10)  # position in the base frame (m)
+    heightmap_rows: PositiveInt = 32  # cells along the heading
+    heightmap_cols: PositiveInt = 32  # cells across
+    heightmap_ahead: tuple[float, float] = (-0.2, 1.4)  # forward extent in the heading frame (m)
+    heightmap_width: PositiveFloat = 1.6  # lateral extent (m)
+
+    @model_validator(mode="after")
+    def _extent_ordered(self) -> SensorConfig:
+        if self.heightmap_ahead[0] >= self.heightmap_ahead[1]:
+            raise ValueError(f"heightmap_ahead must be (near, far) with near < far, got {self.heightmap_ahead}")
+        return self
+
+
+class RandomizationConfig(_Section):
+    """Domain randomisation drawn at every reset (off by default)."""
+
+    enabled: bool = False
+    friction: tuple[PositiveFloat, PositiveFloat] = (0.6, 1.2)
+    mass_scale: tuple[PositiveFloat, PositiveFloat] = (0.85, 1.15)
+
+
+class TaskConfig(_Section):
+    """Episode rules: the paper's 3 m goal, stuck and fall detection, time limit."""
+
+    terrain: str = "single_block"  # named scenario or path to a terrain YAML
+    sensors: tuple[Sensor, ...] = ("heightmap",)
+    goal_distance: PositiveFloat = 3.0  # m of forward progress that ends an episode with success
+    stuck_window: PositiveFloat = 4.0  # s over which progress is measured
+    stuck_progress: PositiveFloat = 0.05  # m; less progress than this over the window means stuck
+    time_limit: PositiveFloat = 40.0  # s, truncation
+    fall_height: PositiveFloat = 0.07  # base height above the terrain below which the robot has fallen (m)
+    fall_tilt: Annotated[float, Field(gt=0, le=math.pi)] = 1.0  # |roll| or |pitch| beyond this is a fall (rad)
+    reward_scale: PositiveFloat = 100.0  # reward = reward_scale * forward velocity (m/s), as in the paper
+    randomization: RandomizationConfig = RandomizationConfig()
+
+
+class CollectConfig(_Section):
+    """Random-policy rollouts logged to MCAP."""
+
+    episodes: PositiveInt = 24
+    terrains: dict[str, PositiveFloat] = {"single_block": 1.0, "random_blocks": 1.0, "flat": 0.25}
+    log_every: PositiveInt = 2  # log every k-th control step
+    max_seconds: PositiveFloat = 25.0  # per-episode cap (s of sim time)
+    workers: PositiveInt = 2
+    seed: int = 0
+    action_scale: Fraction = 0.7  # random second-derivative actions drawn uniformly in +-action_scale
+    out_dir: str = "data/rollouts"
+
+
+class VaeConfig(_Section):
+    """Convolutional VAE over the terrain sensor."""
+
+    modality: Sensor = "heightmap"
+    latent_dim: PositiveInt = 8
+    beta: Annotated[float, Field(ge=0)] = 1.0
+    image_size: PositiveInt = 64  # inputs are resized to image_size x image_size
+    epochs: PositiveInt = 30
+    batch_size: PositiveInt = 64
+    learning_rate: PositiveFloat = 1e-3
+    val_fraction: Annotated[float, Field(gt=0, lt=1)] = 0.2
+    seed: int = 0
+    data_dir: str = "data/rollouts"
+    out_dir: str = "data/models/vae"
+    report_dir: str = "reports/vae"
+
+
+class PpoConfig(_Section):
+    """stable-baselines3 PPO over the CPG-parameter action space."""
+
+    total_timesteps: PositiveInt = 100_000
+    n_envs: PositiveInt = 2
+    n_steps: PositiveInt = 512
+    batch_size: PositiveInt = 128
+    n_epochs: PositiveInt = 10
+    learning_rate: PositiveFloat = 3e-4
+    gamma: Fraction = 0.99
+    gae_lambda: Fraction = 0.95
+    clip_range: PositiveFloat = 0.2
+    ent_coef: Annotated[float, Field(ge=0)] = 0.0
+    net_arch: tuple[PositiveInt, ...] = (64, 64)
+    seed: int = 0
+    blind: bool = False  # drop the terrain embedding (ablation)
+    train_terrains: tuple[str, ...] = ("single_block",)
+    randomize: bool = False  # use TaskConfig.randomization during training
+    checkpoint_every: PositiveInt = 20_000
+    encoder_dir: str = "data/models/vae"
+    out_dir: str = "data/models/ppo"
+    report_dir: str = "reports/ppo"
+
+
+class EvalConfig(_Section):
+    """Generalisation suite and baselines."""
+
+    terrains: tuple[str, ...] = ("single_block", "extra_blocks", "wide_block", "rough")
+    terrain_files: tuple[str, ...] = ()
+    episodes: PositiveInt = 20
+    seed: int = 1000
+    grid_a: tuple[PositiveFloat, ...] = (0.2, 0.3)
+    grid_b: tuple[PositiveFloat, ...] = (0.15, 0.3, 0.45)
+    grid_omega: tuple[PositiveFloat, ...] = (1.0 * math.pi, 1.5 * math.pi)
+    record_video: bool = True
+    policy_dir: str = "data/models/ppo"
+    out_dir: str = "data/eval"
+    report_dir: str = "reports/eval"
+
+
+class Params(_Section):
+    """The whole params.yaml."""
+
+    sim: SimConfig = SimConfig()
+    cpg: CpgConfig = CpgConfig()
+    sensors: SensorConfig = SensorConfig()
+    task: TaskConfig = TaskConfig()
+    collect: CollectConfig = CollectConfig()
+    vae: VaeConfig = VaeConfig()
+    ppo: PpoConfig = PpoConfig()
+    eval: EvalConfig = EvalConfig()
+
+
+def _set_dotted(tree: dict[str, Any], dotted: str, value: Any) -> None:
+    keys = dotted.split(".")
+    node = tree
+    for key in keys[:-1]:
+        child = node.setdefault(key, {})
+        if not isinstance(child, dict):
+            raise ConfigError(f"--set {dotted}: '{key}' is a value, not a section")
+        node = child
+    node[keys[-1]] = value
+
+
+def parse_override(text: str) -> tuple[str, Any]:
+    """'ppo.n_envs=4' -> ('ppo.n_envs', 4); the value is parsed as YAML so lists and numbers work."""
+    key, sep, raw = text.partition("=")
+    if not sep or not key.strip():
+        raise ConfigError(f"--set {text!r}: expected section.key=value")
+    try:
+        value = yaml.safe_load(raw) if raw.strip() else ""
+    except yaml.YAMLError as exc:
+        raise ConfigError(f"--set {key}: value {raw!r} is not valid YAML ({exc.__class__.__name__})") from None
+    return key.strip(), value
+
+
+def _allowed_keys(model: type[BaseModel], loc: tuple[Any, ...]) -> list[str]:
+    for part in loc[:-1]:
+        field = model.model_fields.get(str(part))
+        annotation = getattr(field, "annotation", None)
+        if not (isinstance(annotation, type) and issubclass(annotation, BaseModel)):
+            return []
+        model = annotation
+    return sorted(model.model_fields)
+
+
+def format_validation_error(exc: ValidationError, model: type[BaseModel], source: str) -> str:
+    """One line naming the first bad key, what was given and what is allowed."""
+    err = exc.errors()[0]
+    loc = tuple(err["loc"])
+    key = ".".join(str(p) for p in loc) or "(top level)"
+    if err["type"] == "extra_forbidden":
+        allowed = ", ".join(_allowed_keys(model, loc))
+        return f"{source}: unknown key '{key}'; allowed here: {allowed}"
+    given = err.get("input")
+    shown = "" if isinstance(given, dict) else f" (got {given!r})"
+    return f"{source}: {key}: {err['msg']}{shown}"
+
+
+def load_params(path: str | Path = "params.yaml", overrides: list[str] | tuple[str, ...] = ()) -> Params:
+    """Read params.yaml (missing file -> defaults only if path is None), apply --set overrides, validate."""
+    path = Path(path)
+    if not path.is_file():
+        raise ConfigError(f"params file not found: {path}")
+    try:
+        tree = yaml.safe_load(path.read_text()) or {}
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f" line {mark.line + 1}" if mark else ""
+        raise ConfigError(f"{path}:{where}: not valid YAML") from None
+    if not isinstance(tree, dict):
+        raise ConfigError(f"{path}: top level must be a mapping of sections")
+    for text in overrides:
+        key, value = parse_override(text)
+        _set_dotted(tree, key, value)
+    try:
+        return Params.model_validate(tree)
+    except ValidationError as exc:
+        raise ConfigError(format_validation_error(exc, Params, str(path))) from None

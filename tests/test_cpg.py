@@ -1,0 +1,111 @@
+"""The CPG: convergence to the ellipse, period, tripod phase locking, continuity, parameter bounds."""
+
+import math
+
+import numpy as np
+import pytest
+
+from hexpipe.config import CpgConfig
+from hexpipe.sim.cpg import CPG, coupling_matrix, integrate_parameters, step_oscillators, tripod_phases
+from hexpipe.sim.gait import GaitMap, leg_ik
+from hexpipe.sim.robot import RobotSpec
+
+TRIPODS = np.array([leg.tripod for leg in RobotSpec().legs])
+DT = 1 / 240
+
+
+def run(cpg: CPG, seconds: float, accel=np.zeros(3)) -> list[np.ndarray]:
+    return [cpg.step(accel, DT).copy() for _ in range(round(seconds / DT))]
+
+
+def ellipse_residual(xy: np.ndarray, a: float, b: float) -> np.ndarray:
+    return np.abs((xy[:, 0] / a) ** 2 + (xy[:, 1] / b) ** 2 - 1)
+
+
+def test_off_cycle_starts_converge_to_ellipse():
+    rng = np.random.default_rng(0)
+    cpg = CPG(CpgConfig(), TRIPODS)
+    cpg.reset(cpg.params, z=rng.uniform(-2.5, 2.5, size=(6, 2)) + 0.05)
+    a, b, _ = cpg.params
+    start = ellipse_residual(cpg.xy, a, b)
+    assert start.max() > 0.5
+    run(cpg, 2.0)
+    assert ellipse_residual(cpg.xy, a, b).max() < 1e-3
+
+
+def test_period_matches_omega():
+    cfg = CpgConfig()
+    cpg = CPG(cfg, TRIPODS)
+    omega = cfg.initial[2]
+    ys = np.array([xy[0, 1] for xy in run(cpg, 4 * 2 * math.pi / omega)])
+    crossings = np.flatnonzero((ys[:-1] < 0) & (ys[1:] >= 0))
+    # sub-sample crossing times by linear interpolation
+    times = (crossings + ys[crossings] / (ys[crossings] - ys[crossings + 1])) * DT
+    period = np.diff(times).mean()
+    assert period == pytest.approx(2 * math.pi / omega, rel=0.02)
+
+
+def test_tripods_lock_from_random_phases():
+    rng = np.random.default_rng(1)
+    cpg = CPG(CpgConfig(), TRIPODS)
+    theta = rng.uniform(0, 2 * math.pi, 6)
+    cpg.reset(cpg.params, z=np.stack([np.cos(theta), np.sin(theta)], 1))
+    run(cpg, 10.0)
+    phase = np.arctan2(cpg.z[:, 1], cpg.z[:, 0])
+    rel = np.angle(np.exp(1j * (phase - phase[0])))
+    expected = np.angle(np.exp(1j * (tripod_phases(TRIPODS) - tripod_phases(TRIPODS)[0])))
+    assert np.allclose(np.abs(np.angle(np.exp(1j * (rel - expected)))), 0, atol=0.05)
+
+
+def test_locked_coupling_does_not_change_the_cycle():
+    phases = tripod_phases(TRIPODS)
+    z = np.stack([np.cos(phases), np.sin(phases)], 1)
+    with_coupling = step_oscillators(z, 3.0, DT, 10.0, coupling_matrix(phases, 4.0))
+    without = step_oscillators(z, 3.0, DT, 10.0, coupling_matrix(phases, 0.0))
+    assert np.allclose(with_coupling, without, atol=1e-12)
+
+
+def test_joint_targets_continuous_when_parameters_change_mid_stride():
+    cfg = CpgConfig()
+    cpg = CPG(cfg, TRIPODS)
+    gait = GaitMap(RobotSpec(), 0.2, 0.3)
+    targets = [gait.joint_targets(xy) for xy in run(cpg, 0.7, accel=np.asarray(cfg.accel_limit))]
+    targets += [gait.joint_targets(xy) for xy in run(cpg, 0.7, accel=-np.asarray(cfg.accel_limit))]
+    jumps = np.abs(np.diff(np.array(targets), axis=0)).max()
+    # fastest joint motion is omega * a plus the parameter rate, both bounded: no step larger than a few mrad
+    assert jumps < 0.05
+    assert not np.allclose(cpg.params, cfg.initial)
+
+
+def test_parameter_integration_respects_bounds_and_rate_limits():
+    cfg = CpgConfig()
+    values, rates = np.asarray(cfg.initial), np.zeros(3)
+    for _ in range(2000):
+        values, rates = integrate_parameters(values, rates, np.asarray(cfg.accel_limit), DT, cfg)
+        assert np.all(np.abs(rates) <= np.asarray(cfg.rate_limit) + 1e-12)
+    assert np.allclose(values, cfg.upper)
+    assert np.allclose(rates, 0.0)
+    for _ in range(4000):
+        values, rates = integrate_parameters(values, rates, -np.asarray(cfg.accel_limit), DT, cfg)
+    assert np.allclose(values, cfg.lower)
+
+
+def test_swing_lifts_and_stance_holds_the_ik_angles():
+    gait = GaitMap(RobotSpec(), 0.2, 0.3)
+    xy = np.array([[0.1, 0.2], [0.1, -0.2], [0.0, 0.0], [0.0, 0.1], [-0.1, -0.1], [0.0, -0.05]])
+    t = gait.joint_targets(xy).reshape(6, 3)
+    assert t[0, 1] == pytest.approx(gait.stance_shoulder + 0.2)
+    assert t[1, 1] == pytest.approx(gait.stance_shoulder)
+    assert np.allclose(t[:, 2], gait.stance_elbow)
+    # left legs (sin > 0) yaw with +x, right legs with -x: both sweep the foot backward for increasing x
+    assert t[0, 0] == pytest.approx(0.1) and t[1, 0] == pytest.approx(-0.1)
+
+
+def test_leg_ik_reaches_target_and_rejects_unreachable():
+    s, e = leg_ik(0.25, 0.18, 0.325, 0.325)
+    fx = 0.325 * math.cos(s) + 0.325 * math.cos(s + e)
+    fz = 0.325 * math.sin(s) + 0.325 * math.sin(s + e)
+    assert (fx, fz) == pytest.approx((0.25, -0.18), abs=1e-9)
+    assert 0.325 * math.sin(s) > 0  # knee up
+    with pytest.raises(ValueError, match="workspace"):
+        leg_ik(0.7, 0.2, 0.325, 0.325)
