@@ -14,7 +14,8 @@ TRIPODS = np.array([leg.tripod for leg in RobotSpec().legs])
 DT = 1 / 240
 
 
-def run(cpg: CPG, seconds: float, accel=np.zeros(3)) -> list[np.ndarray]:
+def run(cpg: CPG, seconds: float, accel: np.ndarray | None = None) -> list[np.ndarray]:
+    accel = np.zeros(3) if accel is None else accel
     return [cpg.step(accel, DT).copy() for _ in range(round(seconds / DT))]
 
 

@@ -4,7 +4,8 @@ Observation (Dict):
 - `body` (13): position relative to the start (x, y; z = base height above the terrain below), orientation
   quaternion (xyzw), linear velocity (m/s) and angular velocity (rad/s), world frame;
 - `cpg` (6): a, b, omega and their rates;
-- `heightmap` (rows, cols) float32 m and/or `rgb` (H, W, 3) uint8, as selected by `TaskConfig.sensors`.
+- `heightmap` (rows * cols,) float32 m, row-major (reshape with `env.heightmap.shape`; flat because SB3 expects
+  1-D vectors or images), and/or `rgb` (H, W, 3) uint8, as selected by `TaskConfig.sensors`.
 Action: Box [-1, 1]^3, scaled by `CpgConfig.accel_limit` to d^2/dt^2 (a, b, omega).
 Reward: `reward_scale` * forward velocity (m/s, displacement over the control step), as in the paper.
 Terminates on `goal` (3 m forward), `stuck` (too little progress over a window), `fall` (tilt or base too low)
@@ -16,7 +17,8 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from typing import Any
+from contextlib import suppress
+from typing import Any, ClassVar
 
 import gymnasium as gym
 import numpy as np
@@ -50,7 +52,7 @@ def quat_to_yaw(q: np.ndarray) -> float:
 
 
 class HexapodEnv(gym.Env):
-    metadata = {"render_modes": ["rgb_array"], "render_fps": 20}
+    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 20}
 
     def __init__(
         self,
@@ -112,7 +114,7 @@ class HexapodEnv(gym.Env):
             ),
         }
         if self.heightmap is not None:
-            obs["heightmap"] = spaces.Box(-5.0, 5.0, shape=self.heightmap.shape, dtype=np.float32)
+            obs["heightmap"] = spaces.Box(-5.0, 5.0, shape=(self.heightmap.size,), dtype=np.float32)
         if self.camera is not None:
             obs["rgb"] = spaces.Box(0, 255, shape=(self.camera.height, self.camera.width, 3), dtype=np.uint8)
         return obs
@@ -150,7 +152,7 @@ class HexapodEnv(gym.Env):
         self._targets = targets
         self.robot.command(targets, self.sim_cfg.position_gain, self.sim_cfg.velocity_gain)
 
-        pos, quat, _, _ = self.robot.base_state()
+        pos, _, _, _ = self.robot.base_state()
         self.start_xy = pos[:2].copy()
         self._last_x = float(pos[0])
         self._progress = deque([float(pos[0])], maxlen=self._stuck_steps + 1)
@@ -169,7 +171,7 @@ class HexapodEnv(gym.Env):
             p.stepSimulation(physicsClientId=c)
         self.steps += 1
 
-        pos, quat, lin, ang = self.robot.base_state()
+        pos, quat, lin, _ = self.robot.base_state()
         termination = None
         if not (np.all(np.isfinite(pos)) and np.all(np.isfinite(quat)) and np.all(np.isfinite(lin))):
             termination = "nonfinite"
@@ -191,9 +193,11 @@ class HexapodEnv(gym.Env):
             return "goal"
         roll, pitch = quat_to_roll_pitch(quat)
         below = float(self.terrain.height_at(pos[:1], pos[1:2])[0])
-        if abs(roll) > self.task.fall_tilt or abs(pitch) > self.task.fall_tilt or pos[2] - below < self.task.fall_height:
+        tilted = max(abs(roll), abs(pitch)) > self.task.fall_tilt
+        if tilted or pos[2] - below < self.task.fall_height:
             return "fall"
-        if len(self._progress) > self._stuck_steps and self._progress[-1] - self._progress[0] < self.task.stuck_progress:
+        window_full = len(self._progress) > self._stuck_steps
+        if window_full and self._progress[-1] - self._progress[0] < self.task.stuck_progress:
             return "stuck"
         return None
 
@@ -208,7 +212,8 @@ class HexapodEnv(gym.Env):
         }
         if self.heightmap is not None:
             plane = pos[2] - self.sim_cfg.body_height
-            obs["heightmap"] = np.clip(self.heightmap.read(self.terrain, pos[:2], quat_to_yaw(quat), plane), -5, 5)
+            grid = self.heightmap.read(self.terrain, pos[:2], quat_to_yaw(quat), plane)
+            obs["heightmap"] = np.clip(grid, -5.0, 5.0).reshape(-1)
         if self.camera is not None:
             obs["rgb"] = self.camera.read(pos, quat)
         return obs
@@ -247,8 +252,6 @@ class HexapodEnv(gym.Env):
 
     def close(self) -> None:
         if getattr(self, "client", None) is not None:
-            try:
+            with suppress(Exception):  # already disconnected
                 self._p.disconnect(physicsClientId=self.client)
-            except Exception:  # already disconnected
-                pass
             self.client = None

@@ -8,8 +8,10 @@ small a, b, so we integrate the same flow in normalised coordinates u = (x - cx)
 n = (-v, u), t = (u, v): each oscillator circulates counter-clockwise at exactly omega rad/s on the unit circle and
 is pulled back to it at rate gamma. Changing a or b mid-stride rescales (x, y) continuously.
 
-Tripod coupling (a fixed linear map on the stacked states): lambda * (mean_j R(phi_i - phi_j) z_j - z_i) with phi = 0 for one tripod and pi for the other;
-it vanishes once the tripods are locked in anti-phase, so it does not change the period.
+Tripod coupling (a fixed linear map on the stacked states): lambda * (mean_j R(phi_i - phi_j) z_j - z_i), with
+phi = 0 for one tripod and pi for the other;
+it vanishes once the tripods are locked in anti-phase,
+so it does not change the period.
 """
 
 from __future__ import annotations

@@ -98,7 +98,7 @@ def _inertial(mass: float, size: tuple[float, float, float], xyz: str = "0 0 0")
 
 
 def _capsule_link(name: str, mass: float, length: float, radius: float, rgba: str, foot: float = 0.0) -> str:
-    """A link whose body runs along +x from its joint, as a capsule (so edges of blocks catch it)."""
+    """A link whose body runs along +x from its joint, a cylinder with collision (so block edges catch the shin)."""
     half = length / 2
     geom = f'<origin xyz="{half} 0 0" rpy="0 {math.pi / 2} 0"/><geometry><cylinder radius="{radius}" length="{length}"/></geometry>'
     foot_xml = ""

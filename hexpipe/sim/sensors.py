@@ -32,6 +32,7 @@ class HeightMapSensor:
         gx, gy = np.meshgrid(fx, fy, indexing="ij")
         self._local = np.stack([gx.ravel(), gy.ravel()])  # (2, rows*cols) in the heading frame (m)
         self.shape = (cfg.heightmap_rows, cfg.heightmap_cols)
+        self.size = cfg.heightmap_rows * cfg.heightmap_cols
         self.origin = (near, -half)  # heading-frame position of the grid's corner (m)
 
     def read(self, terrain: HeightSource, base_xy: np.ndarray, yaw: float, plane_z: float) -> np.ndarray:

@@ -1,0 +1,46 @@
+"""The physical premise, measured: fixed open-loop gaits (zero action) on flat ground and the training block.
+
+Usage: python benchmarks/premise.py [--seeds 2] [--out reports/premise.json]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from hexpipe.config import TaskConfig
+from hexpipe.envs.hexapod import HexapodEnv
+
+CASES = [("flat", 0.15), ("flat", 0.40), ("single_block", 0.15), ("single_block", 0.30), ("single_block", 0.40)]
+
+
+def episode(terrain: str, b: float, seed: int) -> dict:
+    env = HexapodEnv(terrain, initial_cpg=(0.25, b, 1.5 * math.pi), task=TaskConfig(sensors=()))
+    env.reset(seed=seed)
+    while True:
+        _, _, terminated, truncated, info = env.step(np.zeros(3))
+        if terminated or truncated:
+            env.close()
+            return {"terrain": terrain, "b": b, "seed": seed, "termination": info["termination"],
+                    "distance_m": round(info["distance"], 3), "time_s": round(info["time"], 2)}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--seeds", type=int, default=2)
+    parser.add_argument("--out", type=Path, default=Path("reports/premise.json"))
+    args = parser.parse_args()
+    rows = [episode(t, b, s) for t, b in CASES for s in range(args.seeds)]
+    for r in rows:
+        print(f"{r['terrain']:13s} b={r['b']:.2f} seed={r['seed']}: {r['termination']} "
+              f"after {r['distance_m']:.2f} m in {r['time_s']:.1f} s")
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(json.dumps(rows, indent=2) + "\n")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,157 @@
+"""The Gymnasium environment: API checkers, determinism, sensors, termination reasons and the physical premise."""
+
+import math
+import warnings
+
+import gymnasium
+import numpy as np
+import pytest
+
+import hexpipe
+from hexpipe.config import SensorConfig, TaskConfig
+from hexpipe.envs.hexapod import HexapodEnv
+
+LOW_GAIT = (0.25, 0.15, 1.5 * math.pi)  # the default: fast, low steps
+HIGH_GAIT = (0.25, 0.40, 1.5 * math.pi)  # b = 0.40 rad lifts the feet ~0.15 m, over the 0.10 m block
+
+
+def rollout(env: HexapodEnv, seed: int, actions=None, max_steps: int = 10_000) -> dict:
+    env.reset(seed=seed)
+    for i in range(max_steps):
+        action = np.zeros(3) if actions is None else actions[i % len(actions)]
+        _, _, terminated, truncated, info = env.step(action)
+        if terminated or truncated:
+            return info | {"truncated": truncated}
+    raise AssertionError("episode did not end")
+
+
+def test_registered_with_gymnasium():
+    env = gymnasium.make(hexpipe.ENV_ID, terrain="flat")
+    obs, info = env.reset(seed=0)
+    assert set(obs) == {"body", "cpg", "heightmap"}
+    assert info["distance"] == pytest.approx(0.0, abs=1e-6)
+    env.close()
+
+
+def test_gymnasium_and_sb3_checkers_pass_without_warnings():
+    from gymnasium.utils.env_checker import check_env as gym_check
+    from stable_baselines3.common.env_checker import check_env as sb3_check
+
+    for sensors in [("heightmap",), ("rgb", "heightmap"), ()]:
+        env = HexapodEnv("single_block", task=TaskConfig(sensors=sensors))
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            gym_check(env, skip_render_check=True)
+            sb3_check(env, warn=True)
+        env.close()
+        assert not [str(w.message) for w in caught], sensors
+
+
+def test_same_seed_same_rollout_and_random_terrain_depends_on_seed():
+    actions = np.random.default_rng(0).uniform(-1, 1, size=(40, 3))
+    runs = []
+    for seed in (3, 3, 4):
+        env = HexapodEnv("random_blocks")
+        obs, _ = env.reset(seed=seed)
+        trace = [obs["heightmap"].copy()]
+        for a in actions:
+            obs, reward, *_ = env.step(a)
+            trace.append(np.concatenate([obs["body"], obs["cpg"], [reward]]))
+        runs.append(trace)
+        env.close()
+    assert all(np.array_equal(x, y) for x, y in zip(runs[0], runs[1], strict=True))
+    assert not np.array_equal(runs[0][0], runs[2][0])  # another seed, other blocks
+
+
+def test_actions_steer_cpg_parameters_within_bounds():
+    env = HexapodEnv("flat")
+    env.reset(seed=0)
+    for _ in range(40):
+        _, _, _, _, info = env.step(np.array([1.0, 1.0, -1.0]))
+    a, b, omega = info["cpg"]
+    assert a == pytest.approx(env.cpg_cfg.upper[0]) and b == pytest.approx(env.cpg_cfg.upper[1])
+    assert omega == pytest.approx(env.cpg_cfg.lower[2])
+    env.close()
+
+
+def test_heightmap_sees_the_block_and_camera_renders_it():
+    env = HexapodEnv("single_block", task=TaskConfig(sensors=("rgb", "heightmap")))
+    obs, _ = env.reset(seed=0)
+    hm = obs["heightmap"].reshape(env.heightmap.shape)
+    near, far = env.sensor_cfg.heightmap_ahead
+    row_x = near + (np.arange(hm.shape[0]) + 0.5) * (far - near) / hm.shape[0]
+    on_block = (row_x > 1.03) & (row_x < 1.27)
+    assert np.allclose(hm[on_block], 0.10, atol=0.02)
+    assert np.allclose(hm[row_x < 0.9], 0.0, atol=0.02)
+    rgb = obs["rgb"]
+    assert rgb.shape == (64, 64, 3) and rgb.dtype == np.uint8 and rgb.std() > 5
+    env.close()
+
+
+def test_truncates_at_time_limit():
+    env = HexapodEnv("flat", task=TaskConfig(time_limit=1.0))
+    info = rollout(env, seed=0)
+    assert info["truncated"] and info["termination"] is None and not info["success"]
+    env.close()
+
+
+def test_flipped_robot_is_a_fall():
+    env = HexapodEnv("flat")
+    env.reset(seed=0)
+    env._p.resetBasePositionAndOrientation(env.robot.body, [0, 0, 0.3], [1, 0, 0, 0], physicsClientId=env.client)
+    _, _, terminated, _, info = env.step(np.zeros(3))
+    assert terminated and info["termination"] == "fall"
+    env.close()
+
+
+def test_nonfinite_physics_terminates_without_crash(monkeypatch):
+    env = HexapodEnv("flat")
+    env.reset(seed=0)
+    nan = np.full(3, np.nan)
+    monkeypatch.setattr(env.robot, "base_state", lambda: (nan, np.full(4, np.nan), nan, nan))
+    obs, reward, terminated, _, info = env.step(np.zeros(3))
+    assert terminated and info["termination"] == "nonfinite" and np.isfinite(reward)
+    assert all(np.all(np.isfinite(v)) for v in obs.values())
+    env.close()
+
+
+def test_initial_cpg_outside_bounds_is_rejected():
+    with pytest.raises(ValueError, match="initial_cpg"):
+        HexapodEnv("flat", initial_cpg=(0.25, 0.9, 4.0))
+
+
+# -- the physical premise: the gait walks, the block stops a low gait, a high gait clears it ----------------------
+@pytest.mark.parametrize("seed", [0, 1])
+def test_default_gait_walks_3m_on_flat(seed):
+    env = HexapodEnv("flat", task=TaskConfig(sensors=()))
+    info = rollout(env, seed)
+    assert info["termination"] == "goal" and info["success"]
+    assert info["time"] < 20.0  # >= 0.15 m/s
+    env.close()
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_block_stops_the_low_gait(seed):
+    env = HexapodEnv("single_block", initial_cpg=LOW_GAIT, task=TaskConfig(sensors=()))
+    info = rollout(env, seed)
+    assert info["termination"] == "stuck"
+    assert 0.3 < info["distance"] < 0.7  # front feet against the block face at 1.0 m
+    env.close()
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_high_gait_clears_the_block(seed):
+    env = HexapodEnv("single_block", initial_cpg=HIGH_GAIT, task=TaskConfig(sensors=()))
+    info = rollout(env, seed)
+    assert info["termination"] == "goal"
+    env.close()
+
+
+def test_sensor_config_shapes_observation():
+    env = HexapodEnv(
+        "flat", sensors=SensorConfig(camera_width=48, camera_height=32, heightmap_rows=16, heightmap_cols=8),
+        task=TaskConfig(sensors=("rgb", "heightmap")),
+    )
+    obs, _ = env.reset(seed=0)
+    assert obs["rgb"].shape == (32, 48, 3) and obs["heightmap"].shape == (16 * 8,)
+    env.close()
