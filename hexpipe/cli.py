@@ -35,6 +35,9 @@ def _user_errors() -> tuple[type[Exception], ...]:
     from hexpipe.sim.terrain import TerrainError
 
     errors.append(TerrainError)
+    from hexpipe.models.vae import EncoderError
+
+    errors.append(EncoderError)
     return tuple(errors)
 
 
@@ -66,6 +69,65 @@ def write_json(path: Path, data: dict) -> None:
     tmp = path.with_name(path.name + ".tmp")
     tmp.write_text(json.dumps(data, indent=2, sort_keys=True) + "\n")
     tmp.replace(path)
+
+
+@app.command()
+def collect(
+    params: ParamsOpt = Path("params.yaml"),
+    set_: SetOpt = None,
+    report: Annotated[Path, typer.Option(help="JSON report")] = Path("reports/collect.json"),
+) -> None:
+    """Random-policy rollouts over the terrain mix, logged to MCAP (RGB, height map, TF, scene, CPG, joints)."""
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn
+
+    from hexpipe.collect import collect as run_collect
+
+    cfg = load(params, set_)
+    with Progress("[bold]collect", BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(), console=console) as bar:
+        task = bar.add_task("episodes", total=cfg.collect.episodes)
+        with user_errors():
+            result = run_collect(cfg, on_episode=lambda done, total: bar.update(task, completed=done, total=total))
+    write_json(report, result)
+    console.print(
+        f"collect: {result['episodes']} episodes, {result['frames']} frames, {result['bytes'] / 1e6:.1f} MB in "
+        f"{cfg.collect.out_dir}; logging keeps {result.get('logging_rate_vs_bare', 1.0):.0%} of the bare env rate"
+    )
+
+
+@app.command("train-ppo")
+def train_ppo_cmd(
+    params: ParamsOpt = Path("params.yaml"),
+    set_: SetOpt = None,
+    resume: Annotated[bool, typer.Option(help="continue from the newest checkpoint in ppo.out_dir")] = False,
+) -> None:
+    """Train PPO on the CPG parameters with the frozen terrain encoder (or blind, ppo.blind=true)."""
+    from hexpipe.rl.train import train_ppo
+
+    cfg = load(params, set_)
+    with user_errors():
+        metrics = train_ppo(cfg, resume=resume)
+    console.print(
+        f"train-ppo: {metrics['timesteps']} steps, success {metrics.get('episode/success_rate', 0):.0%} "
+        f"(last 20 episodes), {metrics['time/train_steps_per_s']:.0f} steps/s "
+        f"({metrics['time/train_vs_bare']:.0%} of the bare env's {metrics['time/bare_env_steps_per_s']:.0f})"
+    )
+
+
+@app.command()
+def evaluate(
+    params: ParamsOpt = Path("params.yaml"),
+    set_: SetOpt = None,
+    terrain: Annotated[
+        list[str] | None, typer.Option("--terrain", help="extra terrain name or YAML file (repeatable)")
+    ] = None,
+) -> None:
+    """Run the policy and baselines on the terrain suite; writes reports/eval (metrics, report, figures, videos)."""
+    from hexpipe.evaluation.run import evaluate as run_evaluate
+
+    cfg = load(params, set_)
+    with user_errors():
+        summary = run_evaluate(cfg, extra_terrains=tuple(terrain or ()))
+    console.print(summary)
 
 
 @app.command()

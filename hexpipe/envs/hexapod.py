@@ -94,8 +94,8 @@ class HexapodEnv(gym.Env):
             self.robot_spec, self.sim_cfg.body_height, self.sim_cfg.stance_reach, self.sim_cfg.lift_gain
         )
         self.cpg = CPG(self.cpg_cfg, np.array([leg.tripod for leg in self.robot_spec.legs]))
-        self.heightmap = HeightMapSensor(self.sensor_cfg) if "heightmap" in self.task.sensors else None
-        self.camera = Camera(self.sensor_cfg, self.client) if "rgb" in self.task.sensors else None
+        self.heightmap = HeightMapSensor(self.sensor_cfg)
+        self.camera: Camera | None = None  # made on first use: only rgb observations or loggers need it
 
         self.action_space = spaces.Box(-1.0, 1.0, shape=(3,), dtype=np.float32)
         self.observation_space = spaces.Dict(self._observation_spaces())
@@ -113,10 +113,11 @@ class HexapodEnv(gym.Env):
                 np.concatenate([lo, -rate]).astype(np.float32), np.concatenate([hi, rate]).astype(np.float32)
             ),
         }
-        if self.heightmap is not None:
+        if "heightmap" in self.task.sensors:
             obs["heightmap"] = spaces.Box(-5.0, 5.0, shape=(self.heightmap.size,), dtype=np.float32)
-        if self.camera is not None:
-            obs["rgb"] = spaces.Box(0, 255, shape=(self.camera.height, self.camera.width, 3), dtype=np.uint8)
+        if "rgb" in self.task.sensors:
+            shape = (self.sensor_cfg.camera_height, self.sensor_cfg.camera_width, 3)
+            obs["rgb"] = spaces.Box(0, 255, shape=shape, dtype=np.uint8)
         return obs
 
     # -- episode -----------------------------------------------------------------------------------------------
@@ -157,7 +158,8 @@ class HexapodEnv(gym.Env):
         self._last_x = float(pos[0])
         self._progress = deque([float(pos[0])], maxlen=self._stuck_steps + 1)
         self.steps = 0
-        return self._observation(), self._info(pos, reward_terms={}, termination=None)
+        self.last_info = self._info(pos, reward_terms={}, termination=None)
+        return self._observation(), self.last_info
 
     def step(self, action: np.ndarray):
         assert self.robot is not None, "call reset() before step()"
@@ -185,7 +187,8 @@ class HexapodEnv(gym.Env):
         terms = {"forward_velocity": dx / self.control_dt, "reward_forward": reward}
         truncated = termination is None and self.steps >= self.max_steps
         obs = self._observation() if termination != "nonfinite" else self._zero_observation()
-        return obs, reward, termination is not None, truncated, self._info(pos, terms, termination)
+        self.last_info = self._info(pos, terms, termination)
+        return obs, reward, termination is not None, truncated, self.last_info
 
     def _termination(self, pos: np.ndarray, quat: np.ndarray) -> str | None:
         distance = float(pos[0] - self.start_xy[0])
@@ -210,13 +213,29 @@ class HexapodEnv(gym.Env):
             "body": np.clip(body, -100, 100).astype(np.float32),
             "cpg": np.concatenate([self.cpg.params, self.cpg.rates]).astype(np.float32),
         }
-        if self.heightmap is not None:
+        sensed = self.sense(self.task.sensors, base=(pos, quat))
+        if "heightmap" in sensed:
+            obs["heightmap"] = sensed["heightmap"].reshape(-1)
+        if "rgb" in sensed:
+            obs["rgb"] = sensed["rgb"]
+        return obs
+
+    def sense(self, modalities, base=None) -> dict[str, np.ndarray]:
+        """Read terrain sensors now: `heightmap` (rows x cols, m above the stance plane) and/or `rgb`.
+
+        Independent of the observation's sensors, so a logger can record images on the steps it keeps only.
+        """
+        pos, quat = base if base is not None else self.robot.base_state()[:2]
+        out: dict[str, np.ndarray] = {}
+        if "heightmap" in modalities:
             plane = pos[2] - self.sim_cfg.body_height
             grid = self.heightmap.read(self.terrain, pos[:2], quat_to_yaw(quat), plane)
-            obs["heightmap"] = np.clip(grid, -5.0, 5.0).reshape(-1)
-        if self.camera is not None:
-            obs["rgb"] = self.camera.read(pos, quat)
-        return obs
+            out["heightmap"] = np.clip(grid, -5.0, 5.0)
+        if "rgb" in modalities:
+            if self.camera is None:
+                self.camera = Camera(self.sensor_cfg, self.client)
+            out["rgb"] = self.camera.read(pos, quat)
+        return out
 
     def _zero_observation(self) -> dict[str, np.ndarray]:
         return {k: np.zeros(s.shape, dtype=s.dtype) for k, s in self.observation_space.spaces.items()}

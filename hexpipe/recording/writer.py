@@ -28,6 +28,7 @@ from foxglove.mcap import MCAPCompression, MCAPWriteOptions
 from foxglove.messages import (
     Color,
     CubePrimitive,
+    CylinderPrimitive,
     FrameTransform,
     FrameTransforms,
     Grid,
@@ -39,6 +40,7 @@ from foxglove.messages import (
     RawImage,
     SceneEntity,
     SceneUpdate,
+    SpherePrimitive,
     Timestamp,
     TriangleListPrimitive,
     Vector2,
@@ -48,6 +50,7 @@ from foxglove.messages import (
 import foxglove
 
 TOPIC_TERRAIN = "/terrain"
+TOPIC_ROBOT = "/robot"
 TOPIC_TF = "/tf"
 TOPIC_IMAGE = "/camera/image"
 TOPIC_HEIGHTMAP = "/heightmap"
@@ -143,6 +146,7 @@ class EpisodeWriter:
             for name, record in metadata.items():
                 self._writer.write_metadata(name, dict(record))
             self._scene = SceneUpdateChannel(TOPIC_TERRAIN, context=self._context)
+            self._robot = SceneUpdateChannel(TOPIC_ROBOT, context=self._context)
             self._tf = FrameTransformsChannel(TOPIC_TF, context=self._context)
             self._image = RawImageChannel(TOPIC_IMAGE, context=self._context)
             self._grid = GridChannel(TOPIC_HEIGHTMAP, context=self._context)
@@ -178,6 +182,27 @@ class EpisodeWriter:
                 SceneEntity(timestamp=stamp, frame_id=WORLD_FRAME, id=f"heightfield/{k}", triangles=[_mesh(field)])
             )
         self._scene.log(SceneUpdate(entities=entities), log_time=t_ns)
+
+    def log_robot(self, t_ns: int, shapes: Sequence[Any]) -> None:
+        """Log the robot's geometry once: one entity per link, in that link's frame, so /tf animates it.
+
+        shapes: objects with .link, .kind ("cube", "cylinder" along the link's +x, "sphere"), .position,
+        .size (full extents, m) and .rgba, e.g. `hexpipe.sim.robot.robot_shapes(spec)`.
+        """
+        stamp = _stamp(t_ns)
+        along_x = Quaternion(x=0.0, y=math.sqrt(0.5), z=0.0, w=math.sqrt(0.5))  # cylinder axis z -> link x
+        upright = Quaternion(x=0.0, y=0.0, z=0.0, w=1.0)
+        per_link: dict[str, dict[str, list]] = {}
+        for shape in shapes:
+            prims = per_link.setdefault(shape.link, {"cubes": [], "cylinders": [], "spheres": []})
+            size = shape.size if shape.kind != "cylinder" else (shape.size[1], shape.size[2], shape.size[0])
+            pose = Pose(position=_vec3(shape.position), orientation=along_x if shape.kind == "cylinder" else upright)
+            kind = {"cube": (CubePrimitive, "cubes"), "cylinder": (CylinderPrimitive, "cylinders"),
+                    "sphere": (SpherePrimitive, "spheres")}[shape.kind]
+            prims[kind[1]].append(kind[0](pose=pose, size=_vec3(size), color=_color(shape.rgba)))
+        entities = [SceneEntity(timestamp=stamp, frame_id=link, id=f"robot/{link}", frame_locked=True, **prims)
+                    for link, prims in per_link.items()]
+        self._robot.log(SceneUpdate(entities=entities), log_time=t_ns)
 
     def log_step(
         self,
@@ -254,7 +279,7 @@ class EpisodeWriter:
             self._tmp.unlink(missing_ok=True)
 
     def _close_channels(self) -> None:
-        for name in ("_scene", "_tf", "_image", "_grid"):
+        for name in ("_scene", "_robot", "_tf", "_image", "_grid"):
             if hasattr(self, name):  # absent when __init__ failed part-way
                 getattr(self, name).close()
         for channel in self._json.values():

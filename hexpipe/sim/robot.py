@@ -88,6 +88,33 @@ class RobotSpec:
         return self.chassis_mass + len(self.legs) * (self.hip_mass + self.upper_mass + self.lower_mass)
 
 
+@dataclass(frozen=True)
+class LinkShape:
+    """A visual primitive fixed to a link frame (for viewers such as Foxglove), in that frame's coordinates."""
+
+    link: str
+    kind: str  # "cube", "cylinder" (axis along +x of the link) or "sphere"
+    position: tuple[float, float, float]
+    size: tuple[float, float, float]  # full extents (m)
+    rgba: tuple[float, float, float, float]
+
+
+def robot_shapes(spec: RobotSpec) -> list[LinkShape]:
+    """The robot's visual geometry per link, matching the URDF."""
+    shapes = [LinkShape("base_link", "cube", (0.0, 0.0, 0.0), spec.chassis_size, (0.8, 0.3, 0.1, 1.0))]
+    grey = (0.3, 0.3, 0.35, 1.0)
+    for leg in spec.legs:
+        b, u, lo = spec.bracket_length, spec.upper_length, spec.lower_length
+        r = spec.link_radius
+        shapes += [
+            LinkShape(f"{leg.name}_hip", "cube", (b / 2, 0.0, 0.0), (b, 0.08, 0.08), (0.2, 0.2, 0.2, 1.0)),
+            LinkShape(f"{leg.name}_upper", "cylinder", (u / 2, 0.0, 0.0), (u, 2 * r, 2 * r), grey),
+            LinkShape(f"{leg.name}_lower", "cylinder", (lo / 2, 0.0, 0.0), (lo, 1.6 * r, 1.6 * r), (0.6, 0.6, 0.65, 1.0)),
+            LinkShape(f"{leg.name}_lower", "sphere", (lo, 0.0, 0.0), (2 * spec.foot_radius,) * 3, (0.1, 0.1, 0.1, 1.0)),
+        ]
+    return shapes
+
+
 def _inertial(mass: float, size: tuple[float, float, float], xyz: str = "0 0 0") -> str:
     sx, sy, sz = size
     ixx, iyy, izz = (mass / 12 * (sy**2 + sz**2), mass / 12 * (sx**2 + sz**2), mass / 12 * (sx**2 + sy**2))

@@ -1,0 +1,156 @@
+"""The train-ppo stage: PPO on the CPG-parameter action space with the frozen terrain encoder."""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from stable_baselines3 import PPO
+from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecEnv, VecNormalize
+
+from hexpipe.config import Params
+from hexpipe.envs.hexapod import HexapodEnv
+from hexpipe.rl.checkpoint import MODEL, NORMALISATION, latest_checkpoint, save_checkpoint, save_policy
+from hexpipe.rl.features import TerrainFeatures
+
+POLICY_CONFIG = "policy.json"
+
+
+def env_factory(params: Params, terrain: str, sensors: tuple[str, ...], randomize: bool) -> Callable[[], HexapodEnv]:
+    """A picklable constructor for one environment (SubprocVecEnv builds it in the worker)."""
+    task = params.task.model_copy(update={"sensors": sensors})
+
+    def make() -> HexapodEnv:
+        return HexapodEnv(
+            terrain, sim=params.sim, cpg=params.cpg, sensors=params.sensors, task=task, randomize=randomize
+        )
+
+    return make
+
+
+def make_vec_env(
+    params: Params, terrains: tuple[str, ...], n_envs: int, sensors: tuple[str, ...], randomize: bool, seed: int
+) -> VecEnv:
+    """n_envs raw environments cycling through `terrains`, in worker processes when n_envs > 1."""
+    fns = [env_factory(params, terrains[i % len(terrains)], sensors, randomize) for i in range(n_envs)]
+    venv = SubprocVecEnv(fns, start_method="fork") if n_envs > 1 else DummyVecEnv(fns)
+    venv.seed(seed)
+    return venv
+
+
+def load_terrain_encoder(params: Params):
+    """The frozen VAE encoder, or None for a blind policy."""
+    if params.ppo.blind:
+        return None
+    from hexpipe.models.vae import load_encoder
+
+    return load_encoder(params.ppo.encoder_dir)
+
+
+def wrap_features(venv: VecEnv, encoder, params: Params) -> TerrainFeatures:
+    shape = (params.sensors.heightmap_rows, params.sensors.heightmap_cols)
+    return TerrainFeatures(venv, encoder, heightmap_shape=shape)
+
+
+def bare_step_rate(venv: VecEnv, steps: int, seed: int) -> float:
+    """Env steps per second of the raw vectorised env with random actions (no encoder, no learner)."""
+    rng = np.random.default_rng(seed)
+    venv.reset()
+    start = time.perf_counter()
+    for _ in range(steps):
+        venv.step(rng.uniform(-1, 1, size=(venv.num_envs, 3)).astype(np.float32))
+    return steps * venv.num_envs / (time.perf_counter() - start)
+
+
+def policy_config(params: Params, encoder, observation_dim: int) -> dict[str, Any]:
+    """What evaluate needs to rebuild the policy's input exactly (and to refuse a mismatch)."""
+    return {
+        "observation_dim": observation_dim,
+        "blind": encoder is None,
+        "modality": None if encoder is None else encoder.modality,
+        "latent_dim": 0 if encoder is None else encoder.latent_dim,
+        "encoder_dir": None if encoder is None else str(params.ppo.encoder_dir),
+        "sensors": params.sensors.model_dump(mode="json"),
+        "sim": params.sim.model_dump(mode="json"),
+        "cpg": params.cpg.model_dump(mode="json"),
+        "train_terrains": list(params.ppo.train_terrains),
+        "randomize": params.ppo.randomize,
+    }
+
+
+def train_ppo(params: Params, resume: bool = False, show_progress: bool = True) -> dict[str, Any]:
+    """Train, checkpointing as it goes; returns the final metrics (also written by dvclive)."""
+    import torch
+    from dvclive import Live
+
+    from hexpipe.rl.callbacks import Checkpoints, EpisodeStats, RichProgress
+
+    cfg = params.ppo
+    torch.set_num_threads(1)
+    out_dir, report_dir = Path(cfg.out_dir), Path(cfg.report_dir)
+    checkpoints = out_dir / "checkpoints"
+    encoder = load_terrain_encoder(params)
+    sensors = () if encoder is None else (encoder.modality,)
+    raw = make_vec_env(params, cfg.train_terrains, cfg.n_envs, sensors, cfg.randomize, cfg.seed)
+    bare_rate = bare_step_rate(raw, steps=max(20, 200 // cfg.n_envs), seed=cfg.seed)
+    raw.seed(cfg.seed)
+    venv = wrap_features(raw, encoder, params)
+
+    start_from = latest_checkpoint(checkpoints) if resume else None
+    if start_from is not None:
+        venv = VecNormalize.load(str(start_from / NORMALISATION), venv)
+        model = PPO.load(start_from / MODEL, env=venv, device="cpu")
+    else:
+        venv = VecNormalize(venv, norm_obs=True, norm_reward=True, clip_obs=10.0, gamma=cfg.gamma)
+        model = PPO(
+            "MlpPolicy", venv, n_steps=cfg.n_steps, batch_size=cfg.batch_size, n_epochs=cfg.n_epochs,
+            learning_rate=cfg.learning_rate, gamma=cfg.gamma, gae_lambda=cfg.gae_lambda, clip_range=cfg.clip_range,
+            ent_coef=cfg.ent_coef, policy_kwargs={"net_arch": list(cfg.net_arch)}, seed=cfg.seed, device="cpu",
+            verbose=0,
+        )
+
+    live = Live(str(report_dir), dvcyaml=False, save_dvc_exp=False, resume=start_from is not None)
+    stats = EpisodeStats(live)
+    callbacks = [stats, Checkpoints(checkpoints, cfg.checkpoint_every)]
+    if show_progress:
+        callbacks.append(RichProgress(cfg.total_timesteps, stats))
+    remaining = cfg.total_timesteps - model.num_timesteps
+    started, start_steps = time.perf_counter(), model.num_timesteps
+    if remaining > 0:
+        model.learn(remaining, callback=callbacks, reset_num_timesteps=start_from is None)
+    train_rate = (model.num_timesteps - start_steps) / max(time.perf_counter() - started, 1e-9)
+    save_checkpoint(model, checkpoints)
+    save_policy(model, out_dir / "policy")
+    config = policy_config(params, encoder, int(venv.observation_space.shape[0]))
+    tmp = out_dir / (POLICY_CONFIG + ".tmp")
+    tmp.write_text(json.dumps(config, indent=2) + "\n")
+    tmp.replace(out_dir / POLICY_CONFIG)
+
+    metrics = {
+        **stats.recent(),
+        "timesteps": model.num_timesteps,
+        "time/train_steps_per_s": train_rate,
+        "time/bare_env_steps_per_s": bare_rate,
+        "time/train_vs_bare": train_rate / bare_rate,
+        "episode/timesteps_to_90pct_success": first_sustained_success(stats.episodes, threshold=0.9, window=20),
+    }
+    for name, value in metrics.items():
+        if value is not None and name != "timesteps":
+            live.log_metric(name, value, plot=False)
+    live.make_summary()
+    live.end()
+    (report_dir / "episodes.jsonl").write_text("".join(json.dumps(e) + "\n" for e in stats.episodes))
+    venv.close()
+    return metrics
+
+
+def first_sustained_success(episodes: list[dict[str, Any]], threshold: float, window: int) -> int | None:
+    """Timesteps at which the success rate over the last `window` finished episodes first reached `threshold`."""
+    for end in range(window, len(episodes) + 1):
+        if np.mean([e["success"] for e in episodes[end - window:end]]) >= threshold:
+            return int(episodes[end - 1]["timesteps"])
+    return None
