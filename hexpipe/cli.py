@@ -35,9 +35,11 @@ def _user_errors() -> tuple[type[Exception], ...]:
     from hexpipe.sim.terrain import TerrainError
 
     errors.append(TerrainError)
+    from hexpipe.models.train_vae import VaeDataError
     from hexpipe.models.vae import EncoderError
+    from hexpipe.recording.reader import RecordingError
 
-    errors.append(EncoderError)
+    errors += [EncoderError, VaeDataError, RecordingError]
     return tuple(errors)
 
 
@@ -92,6 +94,18 @@ def collect(
         f"collect: {result['episodes']} episodes, {result['frames']} frames, {result['bytes'] / 1e6:.1f} MB in "
         f"{cfg.collect.out_dir}; logging keeps {result.get('logging_rate_vs_bare', 1.0):.0%} of the bare env rate"
     )
+
+
+@app.command("train-vae")
+def train_vae_cmd(params: ParamsOpt = Path("params.yaml"), set_: SetOpt = None) -> None:
+    """Train the VAE on the collected frames (vae.modality: rgb or heightmap) and export the frozen encoder."""
+    from hexpipe.models.train_vae import train_vae
+
+    cfg = load(params, set_)
+    with user_errors():
+        metrics = train_vae(cfg.vae)
+    shown = {k: round(v, 4) for k, v in metrics.items() if k in ("val/loss", "probe_accuracy", "probe_baseline")}
+    console.print(f"train-vae: {shown}; encoder in {cfg.vae.out_dir}")
 
 
 @app.command("train-ppo")
@@ -160,4 +174,8 @@ def bench(
 
 
 def main() -> None:  # pragma: no cover - console entry point
+    app()
+
+
+if __name__ == "__main__":  # python -m hexpipe.cli
     app()

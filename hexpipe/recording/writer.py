@@ -22,6 +22,7 @@ from pathlib import Path
 from types import TracebackType
 from typing import Any, Protocol, Self
 
+import foxglove
 import numpy as np
 from foxglove.channels import FrameTransformsChannel, GridChannel, RawImageChannel, SceneUpdateChannel
 from foxglove.mcap import MCAPCompression, MCAPWriteOptions
@@ -46,8 +47,6 @@ from foxglove.messages import (
     Vector2,
     Vector3,
 )
-
-import foxglove
 
 TOPIC_TERRAIN = "/terrain"
 TOPIC_ROBOT = "/robot"

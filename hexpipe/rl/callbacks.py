@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import time
 from pathlib import Path
 from typing import Any
@@ -20,11 +21,21 @@ class EpisodeStats(BaseCallback):
     (episode reward against time) as a DVC plot, plus success rate and distance.
     """
 
-    def __init__(self, live: Any | None = None, window: int = 20):
+    def __init__(self, live: Any | None = None, window: int = 20, log_path: Path | None = None,
+                 resume_at: int | None = None):
+        """log_path: episodes.jsonl, appended as episodes end; with resume_at, episodes up to that timestep are
+        kept from a previous run (the rest happened after the checkpoint and are replayed)."""
         super().__init__()
         self.live = live
         self.window = window
+        self.log_path = log_path
         self.episodes: list[dict[str, Any]] = []
+        if log_path is not None:
+            if resume_at is not None and log_path.is_file():
+                rows = [json.loads(line) for line in log_path.read_text().splitlines() if line.strip()]
+                self.episodes = [r for r in rows if r["timesteps"] <= resume_at]
+            log_path.parent.mkdir(parents=True, exist_ok=True)
+            log_path.write_text("".join(json.dumps(e) + "\n" for e in self.episodes))
         self._returns: np.ndarray | None = None
         self._rollout_start = time.perf_counter()
         self._rollout_steps = 0
@@ -47,12 +58,16 @@ class EpisodeStats(BaseCallback):
         for i, done in enumerate(self.locals["dones"]):
             if done:
                 info = self.locals["infos"][i]
-                self.episodes.append({
+                episode = {
                     "timesteps": self.num_timesteps, "reward": float(self._returns[i]),
                     "distance": float(info.get("distance", 0.0)), "success": bool(info.get("success", False)),
                     "termination": info.get("termination") or "time_limit",
-                })
+                }
+                self.episodes.append(episode)
                 self._returns[i] = 0.0
+                if self.log_path is not None:
+                    with self.log_path.open("a") as f:
+                        f.write(json.dumps(episode) + "\n")
         return True
 
     def recent(self) -> dict[str, float]:

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import hashlib
 import json
+import shutil
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -82,6 +84,32 @@ def policy_config(params: Params, encoder, observation_dim: int) -> dict[str, An
     }
 
 
+def training_signature(params: Params) -> str:
+    """Hash of everything a checkpoint depends on except the budget: resuming under other params is refused."""
+    relevant = {
+        "sim": params.sim.model_dump(mode="json"), "cpg": params.cpg.model_dump(mode="json"),
+        "sensors": params.sensors.model_dump(mode="json"), "task": params.task.model_dump(mode="json"),
+        "ppo": params.ppo.model_dump(mode="json", exclude={"total_timesteps", "checkpoint_every", "report_dir"}),
+    }
+    return hashlib.sha256(json.dumps(relevant, sort_keys=True).encode()).hexdigest()[:16]
+
+
+def prepare_checkpoints(checkpoints: Path, signature: str, resume: bool) -> Path | None:
+    """The checkpoint to resume from: the newest one if `resume` and it was made under the same params.
+
+    Otherwise the folder is emptied and stamped with this run's signature, so a later --resume can trust it.
+    """
+    marker = checkpoints / "signature.txt"
+    if resume and marker.is_file() and marker.read_text().strip() == signature:
+        found = latest_checkpoint(checkpoints)
+        if found is not None:
+            return found
+    shutil.rmtree(checkpoints, ignore_errors=True)
+    checkpoints.mkdir(parents=True)
+    marker.write_text(signature + "\n")
+    return None
+
+
 def train_ppo(params: Params, resume: bool = False, show_progress: bool = True) -> dict[str, Any]:
     """Train, checkpointing as it goes; returns the final metrics (also written by dvclive)."""
     import torch
@@ -100,7 +128,7 @@ def train_ppo(params: Params, resume: bool = False, show_progress: bool = True) 
     raw.seed(cfg.seed)
     venv = wrap_features(raw, encoder, params)
 
-    start_from = latest_checkpoint(checkpoints) if resume else None
+    start_from = prepare_checkpoints(checkpoints, training_signature(params), resume)
     if start_from is not None:
         venv = VecNormalize.load(str(start_from / NORMALISATION), venv)
         model = PPO.load(start_from / MODEL, env=venv, device="cpu")
@@ -114,7 +142,8 @@ def train_ppo(params: Params, resume: bool = False, show_progress: bool = True) 
         )
 
     live = Live(str(report_dir), dvcyaml=False, save_dvc_exp=False, resume=start_from is not None)
-    stats = EpisodeStats(live)
+    resume_at = model.num_timesteps if start_from is not None else None
+    stats = EpisodeStats(live, log_path=report_dir / "episodes.jsonl", resume_at=resume_at)
     callbacks = [stats, Checkpoints(checkpoints, cfg.checkpoint_every)]
     if show_progress:
         callbacks.append(RichProgress(cfg.total_timesteps, stats))
@@ -143,7 +172,6 @@ def train_ppo(params: Params, resume: bool = False, show_progress: bool = True) 
             live.log_metric(name, value, plot=False)
     live.make_summary()
     live.end()
-    (report_dir / "episodes.jsonl").write_text("".join(json.dumps(e) + "\n" for e in stats.episodes))
     venv.close()
     return metrics
 
