@@ -1,0 +1,83 @@
+"""Typed config and the CLI: overrides, and one-line errors (never a traceback) for bad input."""
+
+import math
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from hexpipe.cli import app
+from hexpipe.config import ConfigError, Params, load_params
+
+ROOT = Path(__file__).resolve().parents[1]
+runner = CliRunner()
+
+
+def _flat(tree, prefix=""):
+    if isinstance(tree, dict):
+        return {k: v for key, sub in tree.items() for k, v in _flat(sub, f"{prefix}{key}.").items()}
+    if isinstance(tree, list | tuple):
+        return {k: v for i, sub in enumerate(tree) for k, v in _flat(sub, f"{prefix}{i}.").items()}
+    return {prefix[:-1]: tree}
+
+
+def test_params_yaml_matches_the_code_defaults():
+    """params.yaml documents the defaults; only pi-derived values are rounded there."""
+    in_file, defaults = _flat(load_params(ROOT / "params.yaml").model_dump()), _flat(Params().model_dump())
+    assert in_file.keys() == defaults.keys()
+    for key, value in defaults.items():
+        assert in_file[key] == (pytest.approx(value, rel=1e-6) if isinstance(value, float) else value), key
+
+
+def test_overrides_are_typed_and_nested():
+    p = load_params(ROOT / "params.yaml", ["ppo.n_envs=4", "ppo.train_terrains=[flat, rough]", "task.sensors=[rgb]"])
+    assert p.ppo.n_envs == 4 and p.ppo.train_terrains == ("flat", "rough") and p.task.sensors == ("rgb",)
+    assert p.task.randomization.friction == (0.6, 1.2)
+    p = load_params(ROOT / "params.yaml", ["task.randomization.enabled=true"])
+    assert p.task.randomization.enabled
+
+
+@pytest.mark.parametrize(
+    ("override", "expected"),
+    [
+        ("ppo.foo=1", "unknown key 'ppo.foo'; allowed here: batch_size"),
+        ("ppo.n_envs=zero", "ppo.n_envs"),
+        ("ppo.n_envs=0", "greater than or equal to 1"),
+        ("cpg.initial=[0.25, 0.9, 4.0]", "b: need 0 < lower"),
+        ("sim.control_hz=7", "control_hz=7 must divide physics_hz=240"),
+        ("task.sensors=[lidar]", "task.sensors.0"),
+        ("nosuchsection.x=1", "unknown key 'nosuchsection'"),
+        ("ppo", "expected section.key=value"),
+    ],
+)
+def test_bad_overrides_name_the_key(override, expected):
+    with pytest.raises(ConfigError, match=None) as err:
+        load_params(ROOT / "params.yaml", [override])
+    assert expected in str(err.value) and "\n" not in str(err.value)
+
+
+def test_cli_reports_bad_input_in_one_line(tmp_path):
+    bad_yaml = tmp_path / "p.yaml"
+    bad_yaml.write_text("sim: [unclosed\n")
+    cases = [
+        (["bench", "--set", "sim.nope=1"], "unknown key 'sim.nope'"),
+        (["bench", "--params", str(tmp_path / "missing.yaml")], "params file not found"),
+        (["bench", "--params", str(bad_yaml)], "not valid YAML"),
+        (["bench", "--terrains", "nowhere_land"], "nowhere_land"),
+        (["train-vae", "--set", f"vae.data_dir={tmp_path / 'empty'}"], "empty"),
+        (["train-ppo", "--set", f"ppo.encoder_dir={tmp_path / 'none'}"], "none"),
+    ]
+    for args, expected in cases:
+        result = runner.invoke(app, args)
+        assert result.exit_code == 2, (args, result.output)
+        assert expected in result.output and "Traceback" not in result.output, (args, result.output)
+
+
+def test_help_lists_the_stages():
+    result = runner.invoke(app, ["--help"])
+    for command in ("collect", "train-vae", "train-ppo", "evaluate", "bench"):
+        assert command in result.output
+
+
+def test_default_omega_is_three_quarters_hertz():
+    assert Params().cpg.initial[2] == pytest.approx(1.5 * math.pi)

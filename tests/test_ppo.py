@@ -1,0 +1,86 @@
+"""PPO wiring: features built once per step (batched), tiny real training runs, checkpoints and resume."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from stable_baselines3.common.vec_env import DummyVecEnv
+
+from hexpipe.config import Params, load_params
+from hexpipe.envs.hexapod import HexapodEnv
+from hexpipe.models.vae import ConvVAE, encoder_config, export_encoder
+from hexpipe.rl.features import TerrainFeatures
+from hexpipe.rl.train import train_ppo
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+class CountingEncoder:
+    modality, latent_dim = "heightmap", 8
+
+    def __init__(self):
+        self.calls: list[tuple[int, ...]] = []
+
+    def encode(self, batch):
+        self.calls.append(batch.shape)
+        return np.full((len(batch), 8), batch.mean(axis=(1, 2))[:, None], dtype=np.float32)
+
+
+def test_features_encode_once_per_step_batched_and_handle_terminal_observations():
+    fns = [lambda: HexapodEnv("single_block", task=Params().task.model_copy(update={"time_limit": 0.2}))] * 2
+    encoder = CountingEncoder()
+    venv = TerrainFeatures(DummyVecEnv(fns), encoder, heightmap_shape=(32, 32))
+    obs = venv.reset()
+    assert obs.shape == (2, 13 + 6 + 8) and venv.observation_space.shape == (27,)
+    for _ in range(4):  # 0.2 s = 4 steps: every env truncates on the 4th
+        obs, _, dones, infos = venv.step(np.zeros((2, 3), dtype=np.float32))
+    assert dones.all()
+    assert all(info["terminal_observation"].shape == (27,) for info in infos)
+    # one batched call per reset/step, plus one for the batch of terminal observations
+    assert encoder.calls == [(2, 32, 32)] * 5 + [(2, 32, 32)]
+    venv.close()
+
+
+def test_features_refuse_an_encoder_for_an_unobserved_sensor():
+    fns = [lambda: HexapodEnv("flat", task=Params().task.model_copy(update={"sensors": ()}))]
+    with pytest.raises(ValueError, match="modality 'heightmap' is not observed"):
+        TerrainFeatures(DummyVecEnv(fns), CountingEncoder())
+
+
+def tiny(tmp_path: Path, *extra: str) -> Params:
+    return load_params(ROOT / "params.yaml", [
+        "ppo.total_timesteps=256", "ppo.n_steps=64", "ppo.batch_size=64", "ppo.n_epochs=1",
+        "ppo.checkpoint_every=128", "task.time_limit=2.0",
+        f"ppo.out_dir={tmp_path / 'ppo'}", f"ppo.report_dir={tmp_path / 'reports'}",
+        f"ppo.encoder_dir={tmp_path / 'vae'}", *extra,
+    ])
+
+
+def test_tiny_training_with_an_encoder_writes_policy_reports_and_checkpoints(tmp_path):
+    model = ConvVAE(in_channels=1, image_size=64, latent_dim=8)
+    export_encoder(model, tmp_path / "vae", encoder_config(model, "heightmap", (32, 32)))
+    params = tiny(tmp_path, "ppo.n_envs=2")
+    metrics = train_ppo(params, show_progress=False)
+    assert metrics["timesteps"] == 256
+    assert metrics["time/bare_env_steps_per_s"] > 0 and metrics["time/train_steps_per_s"] > 0
+    config = json.loads((tmp_path / "ppo" / "policy.json").read_text())
+    assert config["observation_dim"] == 27 and config["modality"] == "heightmap" and not config["blind"]
+    assert (tmp_path / "ppo" / "policy" / "model.zip").is_file()
+    assert (tmp_path / "ppo" / "policy" / "vecnormalize.pkl").is_file()
+    summary = json.loads((tmp_path / "reports" / "metrics.json").read_text())
+    assert summary["time"]["train_vs_bare"] > 0
+    assert (tmp_path / "reports" / "plots" / "metrics" / "time" / "steps_per_s.tsv").is_file()
+
+
+def test_resume_continues_and_changed_params_start_over(tmp_path):
+    params = tiny(tmp_path, "ppo.blind=true", "ppo.n_envs=1")
+    train_ppo(params, show_progress=False)
+    longer = tiny(tmp_path, "ppo.blind=true", "ppo.n_envs=1", "ppo.total_timesteps=384")
+    metrics = train_ppo(longer, resume=True, show_progress=False)
+    assert metrics["timesteps"] == 384
+    ckpts = sorted(p.name for p in (tmp_path / "ppo" / "checkpoints").glob("step-*"))
+    assert ckpts[-1] == "step-000000384"
+    other = tiny(tmp_path, "ppo.blind=true", "ppo.n_envs=1", "ppo.learning_rate=0.001")
+    metrics = train_ppo(other, resume=True, show_progress=False)
+    assert metrics["timesteps"] == 256  # the old checkpoint was made under other params: not resumed
