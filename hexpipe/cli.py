@@ -145,6 +145,20 @@ def evaluate(
 
 
 @app.command()
+def summary(
+    params: ParamsOpt = Path("params.yaml"),
+    set_: SetOpt = None,
+    collect_report: Annotated[Path, typer.Option(help="collect's JSON report")] = Path("reports/collect.json"),
+    out: Annotated[Path, typer.Option(help="the markdown page")] = Path("reports/README.md"),
+) -> None:
+    """Write reports/README.md: one page linking every stage's figures and tables."""
+    from hexpipe.summary import write_summary
+
+    cfg = load(params, set_)
+    console.print(f"wrote {write_summary(cfg, collect_report, out)}")
+
+
+@app.command()
 def bench(
     params: ParamsOpt = Path("params.yaml"),
     set_: SetOpt = None,

@@ -96,9 +96,8 @@ class SensorConfig(_Section):
 
 
 class RandomizationConfig(_Section):
-    """Domain randomisation drawn at every reset (off by default)."""
+    """Domain-randomisation ranges, drawn at every reset of an env made with randomize=True (ppo.randomize)."""
 
-    enabled: bool = False
     friction: tuple[PositiveFloat, PositiveFloat] = (0.6, 1.2)
     mass_scale: tuple[PositiveFloat, PositiveFloat] = (0.85, 1.15)
 
@@ -183,7 +182,9 @@ class EvalConfig(_Section):
     grid_b: tuple[PositiveFloat, ...] = (0.15, 0.3, 0.45)
     grid_omega: tuple[PositiveFloat, ...] = (1.0 * math.pi, 1.5 * math.pi)
     record_video: bool = True
+    log_episodes: Annotated[int, Field(ge=0)] = 2  # policy episodes per terrain logged to MCAP
     policy_dir: str = "data/models/ppo"
+    blind_policy_dir: str = ""  # optional blind PPO (ppo.blind=true) compared as the `blind` controller
     out_dir: str = "data/eval"
     report_dir: str = "reports/eval"
 

@@ -33,8 +33,8 @@ def test_overrides_are_typed_and_nested():
     p = load_params(ROOT / "params.yaml", ["ppo.n_envs=4", "ppo.train_terrains=[flat, rough]", "task.sensors=[rgb]"])
     assert p.ppo.n_envs == 4 and p.ppo.train_terrains == ("flat", "rough") and p.task.sensors == ("rgb",)
     assert p.task.randomization.friction == (0.6, 1.2)
-    p = load_params(ROOT / "params.yaml", ["task.randomization.enabled=true"])
-    assert p.task.randomization.enabled
+    p = load_params(ROOT / "params.yaml", ["task.randomization.friction=[0.4, 1.5]"])
+    assert p.task.randomization.friction == (0.4, 1.5)
 
 
 @pytest.mark.parametrize(

@@ -172,8 +172,37 @@ def train_ppo(params: Params, resume: bool = False, show_progress: bool = True) 
             live.log_metric(name, value, plot=False)
     live.make_summary()
     live.end()
+    training_curve(stats.episodes, report_dir / "training_curve.png")
     venv.close()
     return metrics
+
+
+def training_curve(episodes: list[dict[str, Any]], path: Path, window: int = 20) -> None:
+    """The paper's figure 6: episode reward against timesteps, with the rolling success rate beside it."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, (ax_r, ax_s) = plt.subplots(1, 2, figsize=(10, 3.6))
+    if episodes:
+        t = np.array([e["timesteps"] for e in episodes])
+        reward = np.array([e["reward"] for e in episodes])
+        success = np.array([e["success"] for e in episodes], dtype=float)
+        k = min(window, len(episodes))
+        smooth = np.convolve(reward, np.ones(k) / k, mode="valid")
+        rate = np.convolve(success, np.ones(k) / k, mode="valid")
+        ax_r.scatter(t, reward, s=4, alpha=0.3, label="episode")
+        ax_r.plot(t[k - 1:], smooth, color="C1", label=f"mean of {k}")
+        ax_s.plot(t[k - 1:], rate, color="C2")
+        ax_r.legend(loc="lower right")
+    ax_r.set(xlabel="timesteps", ylabel="episode reward (100 x v_x summed)", title="Episode reward")
+    ax_s.set(xlabel="timesteps", ylabel=f"success rate (last {window})", ylim=(-0.02, 1.02), title="Reaches 3 m")
+    fig.tight_layout()
+    tmp = path.with_name(path.stem + ".tmp.png")
+    fig.savefig(tmp, dpi=110)
+    plt.close(fig)
+    tmp.replace(path)
 
 
 def first_sustained_success(episodes: list[dict[str, Any]], threshold: float, window: int) -> int | None:
