@@ -4,7 +4,7 @@ VENV ?= .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.hexpipe-installed
 
-.PHONY: setup repro test smoke bench clean-venv
+.PHONY: setup repro test bench clean-venv
 
 $(STAMP): pyproject.toml tools/mcap-check/package-lock.json
 	python3 -m venv $(VENV)
@@ -15,7 +15,7 @@ $(STAMP): pyproject.toml tools/mcap-check/package-lock.json
 setup: $(STAMP)
 
 repro: setup
-	$(BIN)/dvc repro
+	PATH="$(abspath $(BIN)):$$PATH" $(BIN)/dvc repro
 
 test: setup
 	$(BIN)/ruff check .
