@@ -30,17 +30,16 @@ SetOpt = Annotated[
 
 
 def _user_errors() -> tuple[type[Exception], ...]:
-    """Errors caused by bad input: shown as one line, never as a traceback."""
-    errors: list[type[Exception]] = [ConfigError, FileNotFoundError]
-    from hexpipe.sim.terrain import TerrainError
-
-    errors.append(TerrainError)
+    """Errors caused by bad input: shown as one line, never as a traceback (imported late: they pull in torch)."""
+    from hexpipe.evaluation.video import VideoError
     from hexpipe.models.train_vae import VaeDataError
     from hexpipe.models.vae import EncoderError
     from hexpipe.recording.reader import RecordingError
+    from hexpipe.rl.policy import PolicyError
+    from hexpipe.sim.terrain import TerrainError
 
-    errors += [EncoderError, VaeDataError, RecordingError]
-    return tuple(errors)
+    return (ConfigError, FileNotFoundError, TerrainError, EncoderError, VaeDataError, RecordingError, PolicyError,
+            VideoError)
 
 
 @contextmanager
@@ -137,11 +136,13 @@ def evaluate(
 ) -> None:
     """Run the policy and baselines on the terrain suite; writes reports/eval (metrics, report, figures, videos)."""
     from hexpipe.evaluation.run import evaluate as run_evaluate
+    from hexpipe.summary import write_summary
 
     cfg = load(params, set_)
     with user_errors():
-        summary = run_evaluate(cfg, extra_terrains=tuple(terrain or ()))
-    console.print(summary)
+        summary_text = run_evaluate(cfg, extra_terrains=tuple(terrain or ()))
+    console.print(summary_text)
+    console.print(f"wrote {write_summary(cfg, Path('reports/collect.json'), Path('reports/README.md'))}")
 
 
 @app.command()

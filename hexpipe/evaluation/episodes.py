@@ -1,0 +1,113 @@
+"""One evaluation episode: reset(seed), step the controller until terminated or truncated, optionally log it to
+MCAP and film it. Runs in a worker process; everything it needs travels in a small picklable `EpisodeJob`."""
+
+from __future__ import annotations
+
+import math
+import time
+from contextlib import ExitStack
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from hexpipe.config import Params
+from hexpipe.envs.hexapod import HexapodEnv
+from hexpipe.evaluation.controllers import ControllerSpec, build, gait_label
+from hexpipe.evaluation.suite import Scenario
+
+TRACE_COLUMNS = ("time", "distance", "a", "b", "omega")  # s, m, rad, rad, rad/s
+
+
+@dataclass(frozen=True)
+class EpisodeJob:
+    scenario: Scenario
+    controller: ControllerSpec
+    index: int  # episode number within (terrain, controller); the seed is eval.seed + index
+    seed: int
+    mcap: Path | None = None  # log the episode here
+    video: Path | None = None  # film it here
+
+
+@dataclass
+class EpisodeResult:
+    job: EpisodeJob
+    row: dict[str, Any]  # one line of results.csv
+    trace: np.ndarray  # (steps + 1, len(TRACE_COLUMNS)) float32: the CPG parameters against time and distance
+    obstacles: list[tuple[float, float]] = field(default_factory=list)  # x-extents of blocks/bumps (m from start)
+
+
+def _obstacles(env: HexapodEnv) -> list[tuple[float, float]]:
+    """Forward extents (m, from the start) of every box and height field of the realised terrain."""
+    x0 = float(env.start_xy[0])
+    spans = []
+    for box in env.terrain.boxes:
+        half = 0.5 * (abs(math.cos(box.yaw)) * box.size[0] + abs(math.sin(box.yaw)) * box.size[1])
+        spans.append((box.center[0] - half - x0, box.center[0] + half - x0))
+    for hf in env.terrain.heightfields:
+        (lo, hi), _ = hf.extent
+        spans.append((lo - x0, hi - x0))
+    return spans
+
+
+def _trace_row(info: dict[str, Any]) -> list[float]:
+    return [info["time"], info["distance"], *map(float, info["cpg"])]
+
+
+def run_episode(params: Params, job: EpisodeJob) -> EpisodeResult:
+    """Roll out one episode; the controller is deterministic, so (terrain, controller, seed) fixes the result."""
+    from hexpipe.evaluation.video import Mp4Writer
+    from hexpipe.recording.episode import EpisodeLog, episode_metadata
+
+    if job.controller.policy_dir is not None:
+        import torch
+
+        torch.set_num_threads(1)  # one core per worker
+    start = time.perf_counter()
+    controller = build(job.controller, params)
+    env = HexapodEnv(
+        job.scenario.recipe, sim=params.sim, cpg=params.cpg, sensors=params.sensors,
+        task=params.task.model_copy(update={"sensors": controller.sensors}), initial_cpg=controller.initial_cpg,
+        render_mode="rgb_array" if job.video else None,
+    )
+    try:
+        obs, info = env.reset(seed=job.seed)
+        with ExitStack() as stack:
+            log = video = None
+            if job.mcap is not None:
+                job.mcap.parent.mkdir(parents=True, exist_ok=True)
+                meta = episode_metadata(env, job.seed, params.model_dump_json(), index=job.index,
+                                        controller=job.controller.name, policy_dir=job.controller.policy_dir or "")
+                log = stack.enter_context(EpisodeLog(env, job.mcap, meta, log_every=params.collect.log_every))
+                log.step(0.0, info, force=True)
+            if job.video is not None:
+                video = stack.enter_context(Mp4Writer(job.video, fps=params.sim.control_hz))
+                video.add(env.render())
+            trace = [_trace_row(info)]
+            while True:
+                obs, reward, terminated, truncated, info = env.step(controller.act(obs))
+                ended = terminated or truncated
+                trace.append(_trace_row(info))
+                if log is not None:
+                    log.step(reward, info, force=ended)
+                if video is not None:
+                    video.add(env.render())
+                if ended:
+                    break
+        obstacles = _obstacles(env)
+    finally:
+        env.close()
+
+    cpg = np.asarray(trace, dtype=np.float32)
+    gait = job.controller.gait
+    row = {
+        "terrain": job.scenario.stem, "controller": job.controller.name, "episode": job.index, "seed": job.seed,
+        "gait": gait_label(gait) if gait is not None else "",
+        "success": bool(info["success"]), "termination": info["termination"] or "time_limit",
+        "distance": float(info["distance"]), "time": float(info["time"]), "steps": len(trace) - 1,
+        **{f"{k}_mean": float(cpg[:, i].mean()) for i, k in enumerate(TRACE_COLUMNS) if i >= 2},
+        **{f"{k}_max": float(cpg[:, i].max()) for i, k in enumerate(TRACE_COLUMNS) if i >= 2},
+        "wall_s": time.perf_counter() - start,
+    }
+    return EpisodeResult(job, row, cpg, obstacles)

@@ -1,0 +1,258 @@
+"""The evaluate stage: every controller on every terrain of the suite, on the same seeded episodes.
+
+Order of work: validate everything that can be wrong (terrains, grid, policies) before any episode runs; run the
+fixed-gait grid on the training terrains and, in the same worker pool, the learned and open-loop controllers on
+the suite; once the grid is done, pick `best_fixed` and run it on the suite too. Episode i of every (terrain,
+controller) uses seed eval.seed + i; the grid uses the next GRID_SEEDS seeds, so the baseline is not chosen on
+the very episodes it is then scored on. Outputs go to eval.out_dir (MCAP logs, videos, CPG traces) and
+eval.report_dir (metrics.json, results.csv, grid.csv, report.md, figures), every file via a temporary name.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import shlex
+import sys
+import time
+from collections.abc import Callable, Iterable
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from multiprocessing import get_context
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from hexpipe.config import Params
+from hexpipe.evaluation.controllers import (
+    GRID,
+    ORDER,
+    ControllerSpec,
+    Gait,
+    gait_label,
+    grid_gaits,
+    learned_controllers,
+)
+from hexpipe.evaluation.episodes import TRACE_COLUMNS, EpisodeJob, EpisodeResult, run_episode
+from hexpipe.evaluation.metrics import Table, rank_gaits, summarise
+from hexpipe.evaluation.report import ReportInputs, write_reports
+from hexpipe.evaluation.suite import Scenario, evaluation_suite, training_suite
+
+WORKERS = 2  # worker processes, one env each
+GRID_SEEDS = 3  # episodes per gait and training terrain in the best_fixed search
+TRACES = "cpg_traces.csv.gz"
+# Param sections evaluate reads (as dvc.yaml lists them); the reconstructed command overrides only these.
+_READS = ("sim", "cpg", "sensors", "task", "eval", "ppo.train_terrains", "collect.log_every")
+
+
+def _suite_jobs(params: Params, suite: list[Scenario], spec: ControllerSpec) -> list[EpisodeJob]:
+    """eval.episodes jobs per terrain; the policy's first episodes are logged to MCAP and its first one filmed."""
+    cfg, out = params.eval, Path(params.eval.out_dir)
+    jobs = []
+    for scenario in suite:
+        for i in range(cfg.episodes):
+            learned = spec.name == "policy"
+            mcap = out / scenario.stem / f"ep_{i}.mcap" if learned and i < cfg.log_episodes else None
+            video = out / f"{scenario.stem}.mp4" if learned and i == 0 and cfg.record_video else None
+            jobs.append(EpisodeJob(scenario, spec, i, cfg.seed + i, mcap=mcap, video=video))
+    return jobs
+
+
+def _grid_jobs(params: Params, train: list[Scenario], gaits: list[Gait]) -> list[EpisodeJob]:
+    first = params.eval.seed + params.eval.episodes  # disjoint from the evaluation seeds
+    return [EpisodeJob(s, ControllerSpec(GRID, gait=g), i, first + i) for g in gaits for s in train
+            for i in range(GRID_SEEDS)]
+
+
+def _run_pool(
+    params: Params, jobs: list[EpisodeJob], best_fixed_jobs: Callable[[list[EpisodeResult]], list[EpisodeJob]],
+    progress: Callable[[], None],
+) -> list[EpisodeResult]:
+    """Run `jobs` in the worker pool; when the last grid job finishes, also run `best_fixed_jobs(grid results)`."""
+    results: list[EpisodeResult] = []
+    grid_left = sum(j.controller.name == GRID for j in jobs)
+    with ProcessPoolExecutor(max_workers=WORKERS, mp_context=get_context("fork")) as pool:
+        pending: dict[Future, EpisodeJob] = {pool.submit(run_episode, params, j): j for j in jobs}
+        try:
+            while pending:
+                done, _ = wait(pending, return_when=FIRST_COMPLETED)
+                for future in done:
+                    job = pending.pop(future)
+                    results.append(future.result())
+                    progress()
+                    if job.controller.name == GRID:
+                        grid_left -= 1
+                        if grid_left == 0:
+                            grid = [r for r in results if r.job.controller.name == GRID]
+                            pending |= {pool.submit(run_episode, params, j): j for j in best_fixed_jobs(grid)}
+        except BaseException:
+            for future in pending:
+                future.cancel()
+            raise
+    return results
+
+
+def _best_gait(grid: list[EpisodeResult], goal_distance: float) -> tuple[Gait, pd.DataFrame]:
+    ranked = rank_gaits(pd.DataFrame([r.row for r in grid]), goal_distance)
+    gaits = {gait_label(r.job.controller.gait): r.job.controller.gait for r in grid}
+    return gaits[ranked.iloc[0]["gait"]], ranked
+
+
+def _same(a: Any, b: Any) -> bool:
+    """Equal, floats to 1e-6 relative (params.yaml rounds the pi-derived defaults)."""
+    if isinstance(a, list | tuple) and isinstance(b, list | tuple):
+        return len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b, strict=True))
+    if isinstance(a, float | int) and isinstance(b, float | int) and not isinstance(a, bool):
+        return math.isclose(a, b, rel_tol=1e-6)
+    return a == b
+
+
+def _overrides(params: Params) -> list[str]:
+    """--set overrides, vs the code defaults (= params.yaml), of every param evaluate reads."""
+    now, default = params.model_dump(mode="json"), Params().model_dump(mode="json")
+    out = []
+    for key in _READS:
+        section, _, field = key.partition(".")
+        names = [field] if field else list(now[section])
+        for name in names:
+            value = now[section][name]
+            if isinstance(value, dict):  # a nested section: task.randomization
+                out += [f"{section}.{name}.{k}={json.dumps(v)}" for k, v in value.items()
+                        if not _same(v, default[section][name][k])]
+            elif not _same(value, default[section][name]):
+                out.append(f"{section}.{name}={value if isinstance(value, str) else json.dumps(value)}")
+    return out
+
+
+def command_line(params: Params, extra_terrains: Iterable[str]) -> str:
+    """The command that reproduces this run: the CLI's own argv when run from it, else an equivalent one."""
+    argv = sys.argv
+    if Path(argv[0]).name in ("hexpipe", "cli.py") and "evaluate" in argv[1:]:
+        return shlex.join(["hexpipe", *argv[1:]])
+    args = ["hexpipe", "evaluate"]
+    for override in _overrides(params):
+        args += ["--set", override]
+    for terrain in extra_terrains:
+        args += ["--terrain", terrain]
+    return shlex.join(args) + "  # equivalent: evaluate() was called from Python"
+
+
+def _remove_stale(out_dir: Path, suite: list[Scenario], written: set[Path]) -> None:
+    """Drop this suite's recordings that an earlier run left and this one did not rewrite."""
+    for scenario in suite:
+        old = [*(out_dir / scenario.stem).glob("ep_*.mcap"), out_dir / f"{scenario.stem}.mp4"]
+        for path in old:
+            if path.is_file() and path not in written:
+                path.unlink()
+
+
+def _write_traces(path: Path, results: list[EpisodeResult]) -> None:
+    frames = []
+    for r in results:
+        df = pd.DataFrame(r.trace, columns=list(TRACE_COLUMNS))
+        df.insert(0, "episode", r.row["episode"])
+        df.insert(0, "controller", r.row["controller"])
+        df.insert(0, "terrain", r.row["terrain"])
+        frames.append(df)
+    tmp = path.with_name(f".{path.name}.tmp")
+    pd.concat(frames, ignore_index=True).to_csv(tmp, index=False, float_format="%.5g", compression="gzip")
+    os.replace(tmp, path)
+
+
+def _ranks(names: Iterable[str]) -> dict[str, int]:
+    return {name: i for i, name in enumerate(dict.fromkeys(names))}
+
+
+def _progress_bar(total: int, show: bool) -> tuple[Any, Callable[[], None]]:
+    from rich.console import Console
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn, TimeRemainingColumn
+
+    bar = Progress("[bold]evaluate", BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(), TimeRemainingColumn(),
+                   console=Console(stderr=True), disable=not show)
+    task = bar.add_task("episodes", total=total)
+    return bar, lambda: bar.advance(task)
+
+
+def evaluate(params: Params, extra_terrains: Iterable[str] = (), show_progress: bool = True) -> str:
+    """Run the suite, write the reports, and return a short printable summary."""
+    cfg = params.eval
+    extra_terrains = tuple(extra_terrains)
+    suite = evaluation_suite(params, extra_terrains)  # TerrainError, before anything runs
+    train = training_suite(params)
+    gaits = grid_gaits(params)  # ConfigError
+    learned, described, notes = learned_controllers(params)  # PolicyError
+    out_dir, report_dir = Path(cfg.out_dir), Path(cfg.report_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+
+    jobs = _grid_jobs(params, train, gaits)
+    for spec in [*learned, ControllerSpec("open_loop", gait=params.cpg.initial)]:
+        jobs += _suite_jobs(params, suite, spec)
+    jobs.sort(key=lambda j: (j.video is None, j.mcap is None))  # the slow filmed/logged episodes first
+    chosen: dict[str, Any] = {}
+
+    def best_fixed_jobs(grid: list[EpisodeResult]) -> list[EpisodeJob]:
+        chosen["gait"], chosen["grid"] = _best_gait(grid, params.task.goal_distance)
+        return _suite_jobs(params, suite, ControllerSpec("best_fixed", gait=chosen["gait"]))
+
+    started = time.perf_counter()
+    bar, advance = _progress_bar(len(jobs) + len(suite) * cfg.episodes, show_progress)
+    with bar:
+        results = _run_pool(params, jobs, best_fixed_jobs, advance)
+    wall = time.perf_counter() - started
+
+    controllers = [c for c in ORDER if any(r.job.controller.name == c for r in results)]
+    terrains = [s.stem for s in suite]
+    order = {"terrain": _ranks([*terrains, *(s.stem for s in train)]), "controller": _ranks([*ORDER, GRID])}
+    rows = pd.DataFrame([r.row for r in results]).sort_values(
+        ["terrain", "controller", "episode"], key=lambda col: col.map(order[col.name]) if col.name in order else col
+    )
+    table = summarise(rows, terrains, controllers)
+    evaluated = [r for r in results if r.job.controller.name != GRID]
+    written = {p for r in evaluated for p in (r.job.mcap, r.job.video) if p is not None}
+    _remove_stale(out_dir, suite, written)
+    _write_traces(out_dir / TRACES, evaluated)
+
+    inputs = _report_inputs(params, extra_terrains, terrains, controllers, described, notes, chosen, evaluated,
+                            written, wall, len(gaits) * len(train))
+    write_reports(report_dir, rows, table, inputs)
+    return _summary(table, terrains, controllers, inputs.best_gait, wall, report_dir)
+
+
+def _report_inputs(
+    params: Params, extra_terrains: tuple[str, ...], terrains: list[str], controllers: list[str],
+    described: dict[str, str], notes: list[str], chosen: dict[str, Any], evaluated: list[EpisodeResult],
+    written: set[Path], wall: float, grid_cells: int,
+) -> ReportInputs:
+    cfg, out_dir = params.eval, Path(params.eval.out_dir)
+    first = {r.row["terrain"]: r for r in evaluated if r.job.controller.name == "policy" and r.job.index == 0}
+    return ReportInputs(
+        command=command_line(params, extra_terrains), terrains=terrains, controllers=controllers,
+        described={**described, "best_fixed": f"fixed gait {gait_label(chosen['gait'])} (zero action)",
+                   "open_loop": f"fixed gait {gait_label(params.cpg.initial)} = cpg.initial (zero action)"},
+        params_summary={
+            "episodes per terrain and controller": cfg.episodes, "seeds": f"{cfg.seed}..{cfg.seed + cfg.episodes - 1}",
+            "goal": f"{params.task.goal_distance} m", "time limit": f"{params.task.time_limit} s",
+            "best_fixed search": f"{grid_cells} (gait, training terrain) pairs x {GRID_SEEDS} seeds",
+            "wall time": f"{wall:.0f} s with {WORKERS} workers",
+        },
+        grid=chosen["grid"], best_gait=gait_label(chosen["gait"]), first_policy_episodes=first,
+        cpg_initial=params.cpg.initial, goal_distance=params.task.goal_distance,
+        traces=str(out_dir / TRACES), videos={s: str(p) for s in terrains if (p := out_dir / f"{s}.mp4") in written},
+        mcaps={s: sorted(str(p) for p in written if p.suffix == ".mcap" and p.parent.name == s) for s in terrains},
+        notes=notes,
+    )
+
+
+def _summary(
+    table: Table, terrains: list[str], controllers: list[str], best: str, wall: float, report_dir: Path
+) -> str:
+    width = max(len(t) for t in terrains)
+    lines = [f"evaluate: {len(terrains)} terrains x {len(controllers)} controllers in {wall:.0f} s",
+             f"best fixed gait: {best}", f"{'success':{width}s}  " + "  ".join(f"{c:>10s}" for c in controllers)]
+    for t in terrains:
+        cells = [f"{table[t][c]['success_rate']:>10.0%}" if c in table.get(t, {}) else f"{'-':>10s}"
+                 for c in controllers]
+        lines.append(f"{t:{width}s}  " + "  ".join(cells))
+    lines.append(f"report: {report_dir / 'report.md'}")
+    return "\n".join(lines)

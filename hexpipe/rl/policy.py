@@ -1,0 +1,215 @@
+"""Loading a trained PPO policy for evaluation, with its inputs rebuilt exactly as in training.
+
+train-ppo writes `<dir>/policy/model.zip`, `<dir>/policy/vecnormalize.pkl` and `<dir>/policy.json`. At evaluation
+the policy must see the same vector it was trained on: [body, cpg, embedding] (the `TerrainFeatures` layout),
+normalised with the frozen training statistics. Everything that would silently change that vector (another height
+map size or extent, a retrained VAE of another latent size, a blind policy where a seeing one is expected) is
+refused up front with a one-line `PolicyError` saying what was expected and what was found.
+"""
+
+from __future__ import annotations
+
+import json
+import pickle
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from hexpipe.config import Params
+from hexpipe.rl.checkpoint import MODEL, NORMALISATION
+from hexpipe.rl.features import PROPRIOCEPTIVE_KEYS, Encoder
+from hexpipe.rl.train import POLICY_CONFIG
+
+POLICY_SUBDIR = "policy"  # train.py saves model.zip and vecnormalize.pkl here
+_RETRAIN = "run `hexpipe train-ppo`"
+
+# Sensor settings that change what a modality's frames mean (not only their shape).
+_SENSOR_KEYS = {
+    "heightmap": ("heightmap_rows", "heightmap_cols", "heightmap_ahead", "heightmap_width"),
+    "rgb": ("camera_width", "camera_height", "camera_fov_deg", "camera_pitch_deg", "camera_mount"),
+}
+
+
+class PolicyError(ValueError):
+    """A missing, incomplete or incompatible trained policy; one line naming the path and what is wrong."""
+
+
+@dataclass
+class LoadedPolicy:
+    """A frozen PPO policy: raw env observations (Dict, one env) in, deterministic action (3,) out."""
+
+    name: str  # e.g. "ppo+heightmap-vae8" or "ppo-blind"
+    directory: Path
+    config: dict[str, Any]  # policy.json
+    model: Any  # stable_baselines3 PPO
+    normaliser: Any  # VecNormalize with training=False, used only for normalize_obs
+    encoder: Encoder | None
+    heightmap_shape: tuple[int, int]
+    drift: list[str] = field(default_factory=list)  # sim/cpg settings that differ from training (warnings)
+
+    @property
+    def blind(self) -> bool:
+        return self.encoder is None
+
+    @property
+    def sensors(self) -> tuple[str, ...]:
+        """The observation sensors the env must provide (none for a blind policy)."""
+        return () if self.encoder is None else (self.encoder.modality,)
+
+    def features(self, obs: dict[str, np.ndarray]) -> np.ndarray:
+        """One observation -> (1, observation_dim) float32, laid out as `TerrainFeatures.features`."""
+        parts = [np.asarray(obs[k], dtype=np.float32).reshape(1, -1) for k in PROPRIOCEPTIVE_KEYS]
+        if self.encoder is not None:
+            sensor = np.asarray(obs[self.encoder.modality])[None]
+            if self.encoder.modality == "heightmap":
+                sensor = sensor.reshape(1, *self.heightmap_shape)
+            parts.append(self.encoder.encode(sensor).astype(np.float32))
+        return np.concatenate(parts, axis=1)
+
+    def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
+        """Deterministic action in [-1, 1]^3 for one raw observation (normalised as in training)."""
+        x = self.normaliser.normalize_obs(self.features(obs))
+        action, _ = self.model.predict(x, deterministic=True)
+        return np.asarray(action, dtype=np.float32).reshape(-1)
+
+
+def load_policy(
+    policy_dir: str | Path, params: Params, expect_blind: bool | None = None
+) -> LoadedPolicy:
+    """Load and check the policy trained into `policy_dir` (train-ppo's ppo.out_dir) against `params` now.
+
+    expect_blind: True/False refuses a policy that is not / is blind (None accepts either).
+    """
+    from stable_baselines3 import PPO
+
+    directory = Path(policy_dir)
+    if not directory.is_dir():
+        raise PolicyError(f"no trained policy at {directory}: folder not found ({_RETRAIN} first)")
+    config_path = directory / POLICY_CONFIG
+    model_path, norm_path = directory / POLICY_SUBDIR / MODEL, directory / POLICY_SUBDIR / NORMALISATION
+    for path in (config_path, model_path, norm_path):
+        if not path.is_file():
+            raise PolicyError(f"incomplete policy in {directory}: {path} not found ({_RETRAIN})")
+    config = _read_config(config_path)
+    blind = bool(config["blind"])
+    if expect_blind is not None and blind != expect_blind:
+        want, got = ("blind", "one that sees the terrain") if expect_blind else ("seeing", "a blind one")
+        raise PolicyError(f"{directory}: expected a {want} policy, found {got} (policy.json blind={blind})")
+
+    encoder = None if blind else _load_matching_encoder(directory, config, params)
+    dim = int(config["observation_dim"])
+    produced = _feature_dim(params, encoder)
+    if produced != dim:
+        raise PolicyError(
+            f"{directory}: policy expects {dim} input features (policy.json observation_dim), but the env and "
+            f"encoder now produce {produced}; evaluate with the training settings or {_RETRAIN}"
+        )
+
+    try:
+        model = PPO.load(model_path, device="cpu")
+        with norm_path.open("rb") as f:
+            normaliser = pickle.load(f)
+    except Exception as exc:  # zip, pickle and torch errors alike
+        raise PolicyError(f"{directory}: cannot load the policy files ({_one_line(exc)}); {_RETRAIN}") from None
+    model_dim = int(np.prod(model.observation_space.shape))
+    norm_dim = int(np.prod(normaliser.obs_rms.mean.shape))
+    if model_dim != dim or norm_dim != dim:
+        raise PolicyError(
+            f"{directory}: expected observation_dim={dim} (policy.json), found {model_dim} in {MODEL} and "
+            f"{norm_dim} in {NORMALISATION}; the files come from different runs ({_RETRAIN})"
+        )
+    normaliser.training = False  # statistics stay frozen
+    normaliser.norm_reward = False
+
+    latent = "" if encoder is None else f"+{encoder.modality}-vae{encoder.latent_dim}"
+    return LoadedPolicy(
+        name="ppo-blind" if encoder is None else f"ppo{latent}",
+        directory=directory, config=config, model=model, normaliser=normaliser, encoder=encoder,
+        heightmap_shape=(params.sensors.heightmap_rows, params.sensors.heightmap_cols),
+        drift=_drift(config, params),
+    )
+
+
+def _read_config(path: Path) -> dict[str, Any]:
+    try:
+        config = json.loads(path.read_text())
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise PolicyError(f"{path}: unreadable policy config ({_one_line(exc)}); {_RETRAIN}") from None
+    required = ("observation_dim", "blind", "modality", "latent_dim", "encoder_dir", "sensors")
+    missing = [k for k in required if k not in config] if isinstance(config, dict) else list(required)
+    if missing:
+        raise PolicyError(f"{path}: policy config lacks {', '.join(missing)}; {_RETRAIN}")
+    return config
+
+
+def _load_matching_encoder(directory: Path, config: dict[str, Any], params: Params) -> Encoder:
+    """The policy's frozen encoder, checked against policy.json and the sensor settings now."""
+    from hexpipe.models.vae import EncoderError, load_encoder
+
+    modality, encoder_dir = config["modality"], config["encoder_dir"]
+    for key in _SENSOR_KEYS.get(modality, ()):
+        trained, now = config["sensors"].get(key), params.sensors.model_dump(mode="json")[key]
+        if trained != now:
+            raise PolicyError(
+                f"{directory}: policy was trained with sensors.{key}={trained}, params now have {now} "
+                f"(expected {trained}, found {now}); evaluate with the training sensor settings or {_RETRAIN}"
+            )
+    try:
+        encoder = load_encoder(encoder_dir)
+    except EncoderError as exc:
+        raise PolicyError(f"{directory}: the policy's terrain encoder at {encoder_dir} is unusable: {exc}") from None
+    if encoder.modality != modality or encoder.latent_dim != int(config["latent_dim"]):
+        raise PolicyError(
+            f"{directory}: expected a {modality} encoder with latent_dim={config['latent_dim']} (policy.json), "
+            f"found {encoder.modality} with latent_dim={encoder.latent_dim} at {encoder_dir}; the VAE was "
+            f"retrained after the policy ({_RETRAIN})"
+        )
+    shape = _frame_shape(params, modality)
+    if tuple(encoder.input_shape) != shape:
+        raise PolicyError(
+            f"{directory}: encoder at {encoder_dir} expects {modality} frames of shape {tuple(encoder.input_shape)},"
+            f" params.sensors now give {shape}"
+        )
+    return encoder
+
+
+def _frame_shape(params: Params, modality: str) -> tuple[int, ...]:
+    s = params.sensors
+    return (s.heightmap_rows, s.heightmap_cols) if modality == "heightmap" else (s.camera_height, s.camera_width, 3)
+
+
+def _feature_dim(params: Params, encoder: Encoder | None) -> int:
+    """Length of the feature vector the env (its observation space now) and encoder produce."""
+    from hexpipe.envs.hexapod import HexapodEnv
+
+    sensors = () if encoder is None else (encoder.modality,)
+    env = HexapodEnv("flat", sim=params.sim, cpg=params.cpg, sensors=params.sensors,
+                     task=params.task.model_copy(update={"sensors": sensors}))
+    try:
+        spaces = env.observation_space.spaces
+        dim = sum(int(np.prod(spaces[k].shape)) for k in PROPRIOCEPTIVE_KEYS)
+    finally:
+        env.close()
+    return dim + (0 if encoder is None else encoder.latent_dim)
+
+
+def _drift(config: dict[str, Any], params: Params) -> list[str]:
+    """`key: trained -> now` for sim/cpg settings and training terrains changed since training (allowed: they do
+    not change the input layout, but worth reporting)."""
+    out = []
+    for section in ("sim", "cpg"):
+        now = getattr(params, section).model_dump(mode="json")
+        for key, trained in config.get(section, {}).items():
+            if key in now and now[key] != trained:
+                out.append(f"{section}.{key}: {trained} -> {now[key]}")
+    trained_on = config.get("train_terrains")
+    if trained_on is not None and trained_on != list(params.ppo.train_terrains):
+        out.append(f"ppo.train_terrains: {trained_on} -> {list(params.ppo.train_terrains)}")
+    return out
+
+
+def _one_line(exc: BaseException) -> str:
+    text = " ".join(str(exc).split())
+    return f"{type(exc).__name__}: {text}" if text else type(exc).__name__

@@ -1,0 +1,162 @@
+"""The evaluate stage: a tiny real policy through the whole suite, and one-line errors before any episode runs."""
+
+import json
+import re
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from stable_baselines3.common.vec_env import DummyVecEnv
+
+from hexpipe.config import Params, load_params
+from hexpipe.envs.hexapod import HexapodEnv
+from hexpipe.evaluation.metrics import rank_gaits
+from hexpipe.evaluation.run import evaluate
+from hexpipe.evaluation.video import count_frames
+from hexpipe.models.vae import ConvVAE, encoder_config, export_encoder
+from hexpipe.recording.reader import count_messages, read_metadata
+from hexpipe.rl.features import TerrainFeatures
+from hexpipe.rl.policy import PolicyError, load_policy
+from hexpipe.rl.train import train_ppo
+from hexpipe.sim.terrain import TerrainError
+
+ROOT = Path(__file__).resolve().parents[1]
+TINY_PPO = ["ppo.total_timesteps=256", "ppo.n_envs=1", "ppo.n_steps=128", "ppo.batch_size=64", "ppo.n_epochs=1",
+            "task.time_limit=2.0"]
+
+
+def trained(root: Path, *extra: str) -> Params:
+    """Params whose ppo.out_dir holds a freshly trained tiny policy (and eval.policy_dir points at it)."""
+    params = load_params(ROOT / "params.yaml", [
+        *TINY_PPO, f"ppo.out_dir={root / 'ppo'}", f"ppo.report_dir={root / 'ppo-report'}",
+        f"eval.policy_dir={root / 'ppo'}", f"eval.out_dir={root / 'eval'}", f"eval.report_dir={root / 'report'}",
+        "eval.terrains=[single_block, extra_blocks]", "eval.episodes=2", "eval.grid_a=[0.3]", "eval.grid_b=[0.3]",
+        "eval.grid_omega=[4.712389]", *extra,
+    ])
+    train_ppo(params, show_progress=False)
+    return params
+
+
+@pytest.fixture(scope="module")
+def blind(tmp_path_factory) -> Params:
+    return trained(tmp_path_factory.mktemp("blind"), "ppo.blind=true")
+
+
+@pytest.fixture(scope="module")
+def seeing(tmp_path_factory) -> Params:
+    """A tiny policy that sees the height map through an (untrained) 32x32 VAE encoder with 8 latents."""
+    root = tmp_path_factory.mktemp("seeing")
+    model = ConvVAE(in_channels=1, image_size=64, latent_dim=8)
+    export_encoder(model, root / "vae", encoder_config(model, "heightmap", (32, 32)))
+    return trained(root, f"ppo.encoder_dir={root / 'vae'}")
+
+
+def test_evaluate_writes_metrics_report_recordings_and_video(blind):
+    params = blind.model_copy(update={"eval": blind.eval.model_copy(update={"blind_policy_dir": blind.ppo.out_dir})})
+    summary = evaluate(params, show_progress=False)
+    out, report = Path(blind.eval.out_dir), Path(blind.eval.report_dir)
+    assert "single_block" in summary and "report.md" in summary
+
+    metrics = json.loads((report / "metrics.json").read_text())
+    assert list(metrics) == ["single_block", "extra_blocks"]
+    for row in metrics.values():
+        assert list(row) == ["policy", "blind", "best_fixed", "open_loop"]
+        for m in row.values():
+            assert m["episodes"] == 2
+            for key in ("success_rate", "fall_rate", "stuck_rate"):
+                assert 0.0 <= m[key] <= 1.0
+            assert m["distance_std"] >= 0 and all(isinstance(v, int | float) for v in m.values())
+    fixed = metrics["single_block"]["best_fixed"]
+    assert (fixed["a_mean"], fixed["b_mean"]) == pytest.approx((0.3, 0.3))  # the 1-point grid's gait, held
+
+    rows = pd.read_csv(report / "results.csv")
+    assert len(rows) == 2 * 4 * 2 + 3  # terrains x controllers x episodes, plus the grid's 3 seeds
+    evaluated = rows[rows["controller"] != "grid"]
+    assert set(evaluated.groupby("controller")["seed"].apply(tuple)) == {(1000, 1001, 1000, 1001)}  # same seeds
+    assert set(rows.loc[rows["controller"] == "grid", "seed"]).isdisjoint({1000, 1001})
+
+    text = (report / "report.md").read_text()
+    assert "ppo-blind from" in text and "hexpipe evaluate" in text and "a=0.30 b=0.30 omega=1.50pi" in text
+    assert "fails on a wider block" not in text  # claims only for the terrains evaluated
+    assert "crosses the block it was trained on" in text
+    for name in ("success.png", "cpg_single_block.png", "cpg_extra_blocks.png", "grid.csv"):
+        assert (report / name).stat().st_size > 0
+
+    for terrain in ("single_block", "extra_blocks"):
+        files = sorted((out / terrain).glob("*.mcap"))
+        assert [f.name for f in files] == ["ep_0.mcap", "ep_1.mcap"]
+        counts = count_messages(files[0])
+        assert counts["/step"] >= 2 and counts["/terrain"] == 1
+        meta = read_metadata(files[1])["episode"]
+        assert (meta["seed"], meta["controller"], meta["terrain"]) == ("1001", "policy", terrain)
+        first = rows[(rows["terrain"] == terrain) & (rows["controller"] == "policy") & (rows["episode"] == 0)]
+        assert count_frames(out / f"{terrain}.mp4") == 1 + first["steps"].item()  # reset + every step
+    assert not list(out.rglob("*.tmp*")) and not list(report.rglob("*.tmp*"))
+
+
+def test_missing_policy_names_the_path_and_the_fix(tmp_path):
+    params = Params()
+    with pytest.raises(PolicyError, match="train-ppo") as err:
+        load_policy(tmp_path / "nope", params)
+    assert str(tmp_path / "nope") in str(err.value) and "\n" not in str(err.value)
+    (tmp_path / "half").mkdir()
+    with pytest.raises(PolicyError, match=r"policy\.json not found"):
+        load_policy(tmp_path / "half", params)
+
+
+def test_a_changed_heightmap_size_is_refused_with_expected_vs_found(seeing):
+    smaller = seeing.model_copy(update={"sensors": seeing.sensors.model_copy(update={"heightmap_rows": 16})})
+    with pytest.raises(PolicyError, match=r"heightmap_rows=32.*expected 32, found 16"):
+        load_policy(Path(seeing.eval.policy_dir), smaller)
+    with pytest.raises(PolicyError, match="expected a blind policy"):
+        load_policy(Path(seeing.eval.policy_dir), seeing, expect_blind=True)
+
+
+def test_a_retrained_encoder_with_another_latent_size_is_refused(seeing, tmp_path):
+    config = json.loads((Path(seeing.eval.policy_dir) / "policy.json").read_text())
+    model = ConvVAE(in_channels=1, image_size=64, latent_dim=4)
+    export_encoder(model, tmp_path / "vae4", encoder_config(model, "heightmap", (32, 32)))
+    moved = tmp_path / "policy"
+    moved.mkdir()
+    (moved / "policy").symlink_to(Path(seeing.eval.policy_dir) / "policy")
+    (moved / "policy.json").write_text(json.dumps({**config, "encoder_dir": str(tmp_path / "vae4")}))
+    with pytest.raises(PolicyError, match=r"expected a heightmap encoder with latent_dim=8.*found heightmap with "
+                                          r"latent_dim=4"):
+        load_policy(moved, seeing)
+    (moved / "policy.json").write_text(json.dumps({**config, "encoder_dir": str(tmp_path / "missing")}))
+    with pytest.raises(PolicyError, match=re.escape(str(tmp_path / "missing"))):
+        load_policy(moved, seeing)
+
+
+def test_policy_features_match_training_layout(seeing):
+    policy = load_policy(Path(seeing.eval.policy_dir), seeing)
+    assert policy.sensors == ("heightmap",) and policy.name == "ppo+heightmap-vae8"
+    env = HexapodEnv("single_block", sim=seeing.sim, cpg=seeing.cpg, sensors=seeing.sensors, task=seeing.task)
+    obs, _ = env.reset(seed=3)
+    wrapped = TerrainFeatures(DummyVecEnv([lambda: env]), policy.encoder, heightmap_shape=(32, 32))
+    batch = {k: v[None] for k, v in obs.items()}
+    np.testing.assert_array_equal(policy.features(obs), wrapped.features(batch))
+    action = policy.act(obs)
+    assert action.shape == (3,) and np.all(np.abs(action) <= 1) and np.array_equal(action, policy.act(obs))
+    env.close()
+
+
+def test_unknown_terrain_fails_before_any_episode(tmp_path):
+    params = load_params(ROOT / "params.yaml", [f"eval.out_dir={tmp_path / 'eval'}", f"eval.policy_dir={tmp_path}"])
+    with pytest.raises(TerrainError, match="unknown terrain 'nowhere'"):
+        evaluate(params, extra_terrains=("nowhere",), show_progress=False)
+    assert not (tmp_path / "eval").exists()
+
+
+def test_gait_ranking_prefers_success_then_distance_then_speed():
+    rows = pd.DataFrame([
+        {"gait": "slow", "success": True, "distance": 3.0, "time": 30.0, "termination": "goal"},
+        {"gait": "fast", "success": True, "distance": 3.004, "time": 10.0, "termination": "goal"},
+        {"gait": "far", "success": False, "distance": 2.5, "time": 40.0, "termination": "time_limit"},
+        {"gait": "stuck", "success": False, "distance": 0.5, "time": 6.0, "termination": "stuck"},
+    ])
+    assert rank_gaits(rows, goal_distance=3.0)["gait"].tolist() == ["fast", "slow", "far", "stuck"]
+    overshoot = pd.concat([rows, pd.DataFrame([{"gait": "overshoot", "success": True, "distance": 3.02, "time": 20.0,
+                                                  "termination": "goal"}])])
+    assert rank_gaits(overshoot, goal_distance=3.0)["gait"].tolist()[:3] == ["fast", "overshoot", "slow"]
