@@ -128,16 +128,19 @@ def _capsule_link(name: str, mass: float, length: float, radius: float, rgba: st
     """A link whose body runs along +x from its joint, a cylinder with collision (so block edges catch the shin)."""
     half = length / 2
     geom = f'<origin xyz="{half} 0 0" rpy="0 {math.pi / 2} 0"/><geometry><cylinder radius="{radius}" length="{length}"/></geometry>'
+    # Visuals are boxes: the body camera's TinyRenderer cost grows with triangles, and cylinders and spheres
+    # have hundreds each. Collision keeps the round shapes.
+    box = f'<origin xyz="{half} 0 0"/><geometry><box size="{length} {2 * radius} {2 * radius}"/></geometry>'
     foot_xml = ""
     if foot:
         foot_xml = (
             f'<collision><origin xyz="{length} 0 0"/><geometry><sphere radius="{foot}"/></geometry></collision>'
-            f'<visual><origin xyz="{length} 0 0"/><geometry><sphere radius="{foot}"/></geometry>'
+            f'<visual><origin xyz="{length} 0 0"/><geometry><box size="{2 * foot} {2 * foot} {2 * foot}"/></geometry>'
             f'<material name="foot"><color rgba="0.1 0.1 0.1 1"/></material></visual>'
         )
     return (
         f'<link name="{name}">{_inertial(mass, (length, 2 * radius, 2 * radius), f"{half} 0 0")}'
-        f'<visual>{geom}<material name="{name}_m"><color rgba="{rgba}"/></material></visual>'
+        f'<visual>{box}<material name="{name}_m"><color rgba="{rgba}"/></material></visual>'
         f"<collision>{geom}</collision>{foot_xml}</link>"
     )
 

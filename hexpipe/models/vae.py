@@ -1,0 +1,280 @@
+"""Convolutional VAE over the terrain sensor, its loss, the shared preprocessing, and the frozen encoder.
+
+The VAE compresses what the robot sees ahead (an RGB camera frame or a height map) into a small latent whose
+posterior mean is the terrain embedding PPO consumes. Everything the policy side needs at run time lives here
+(`preprocess`, `load_encoder`); the training stage is `hexpipe.models.train_vae`.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+import cv2
+import numpy as np
+import torch
+from torch import Tensor, nn
+
+ENCODER_WEIGHTS = "encoder.pt"
+ENCODER_CONFIG = "encoder.json"
+ENCODER_FORMAT_VERSION = 1
+
+# Encoder widths of the 4 stride-2 conv layers; the decoder mirrors them. 32-64-64-128 trained at only ~410-470
+# images/s at 64x64 on 2 CPU cores, dominated by the 32->64 layer at 16x16 and its mirror; 32-32-64-128 keeps
+# 32 channels at full resolution and the deep width, at ~1.65x the speed (see benchmarks/bench_vae.py).
+DEFAULT_CHANNELS: tuple[int, int, int, int] = (32, 32, 64, 128)
+
+# Height maps are in metres relative to the stance plane. This window covers a dip of 15 cm and a raised block
+# of up to 25 cm (the tallest the hexapod is asked to climb is well below that); flat ground maps to 0.375.
+HEIGHTMAP_RANGE_M: tuple[float, float] = (-0.15, 0.25)
+
+
+class EncoderError(ValueError):
+    """A missing or inconsistent exported encoder, or an input it cannot encode; one line naming the cause."""
+
+
+@dataclass(frozen=True)
+class Normalisation:
+    """Affine map of a raw sensor value to [0, 1]: clip((x - low) / (high - low), 0, 1).
+
+    rgb: low=0, high=255 (uint8 intensity). heightmap: HEIGHTMAP_RANGE_M (metres); out-of-window heights are
+    clipped and non-finite cells (no ray hit) are treated as `low`.
+    """
+
+    low: float
+    high: float
+    units: str
+
+    @classmethod
+    def for_modality(cls, modality: str) -> Normalisation:
+        if modality == "rgb":
+            return cls(0.0, 255.0, "uint8 intensity")
+        if modality == "heightmap":
+            return cls(*HEIGHTMAP_RANGE_M, "m")
+        raise ValueError(f"unknown modality {modality!r}; expected 'rgb' or 'heightmap'")
+
+    def to_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+
+def channels_for(modality: str) -> int:
+    """Input channels of the VAE for a sensor: 3 for rgb, 1 for a height map."""
+    return 3 if modality == "rgb" else 1
+
+
+def preprocess(raw: np.ndarray, modality: str, image_size: int, norm: Normalisation | None = None) -> np.ndarray:
+    """Raw sensor batch -> float32 (N, C, image_size, image_size) in [0, 1]; used by training and encoder.
+
+    rgb: (N, H, W, 3) uint8. heightmap: (N, R, C) float metres. Values are normalised (and clipped) first,
+    then resized with cv2.INTER_AREA, so a clipped spike cannot bleed into its neighbours.
+    """
+    norm = norm or Normalisation.for_modality(modality)
+    raw = np.asarray(raw)
+    expected_ndim = 4 if modality == "rgb" else 3
+    if raw.ndim != expected_ndim or (modality == "rgb" and raw.shape[-1] != 3):
+        want = "(N, H, W, 3) uint8" if modality == "rgb" else "(N, R, C) float"
+        raise ValueError(f"{modality} batch must be {want}, got shape {raw.shape}")
+    x = raw.astype(np.float32)
+    if modality == "heightmap":
+        x = np.nan_to_num(x, nan=norm.low, posinf=norm.high, neginf=norm.low)
+    x = np.clip((x - norm.low) / (norm.high - norm.low), 0.0, 1.0)
+    if x.shape[1:3] != (image_size, image_size):
+        size = (image_size, image_size)
+        x = np.stack([cv2.resize(img, size, interpolation=cv2.INTER_AREA) for img in x])
+    if modality == "rgb":
+        return np.ascontiguousarray(x.transpose(0, 3, 1, 2))
+    return x[:, None]
+
+
+def _check_image_size(image_size: int) -> None:
+    if image_size < 16 or image_size % 16:
+        raise ValueError(f"image_size must be a multiple of 16 (4 stride-2 layers), got {image_size}")
+
+
+class ConvEncoder(nn.Module):
+    """4 stride-2 convs (image_size -> image_size/16) and a linear head to (mu, logvar)."""
+
+    def __init__(
+        self,
+        in_channels: int,
+        image_size: int = 64,
+        latent_dim: int = 8,
+        channels: Sequence[int] = DEFAULT_CHANNELS,
+    ) -> None:
+        super().__init__()
+        _check_image_size(image_size)
+        layers: list[nn.Module] = []
+        prev = in_channels
+        for width in channels:
+            layers += [nn.Conv2d(prev, width, kernel_size=4, stride=2, padding=1), nn.ReLU(inplace=True)]
+            prev = width
+        self.conv = nn.Sequential(*layers, nn.Flatten())
+        self.head = nn.Linear(prev * (image_size // 16) ** 2, 2 * latent_dim)
+        self.latent_dim = latent_dim
+
+    def forward(self, x: Tensor) -> tuple[Tensor, Tensor]:
+        mu, logvar = self.head(self.conv(x)).chunk(2, dim=1)
+        # Bounded log-variance keeps exp() finite early in training; the bound (std in [7e-3, 150]) never
+        # binds at a sensible optimum.
+        return mu, logvar.clamp(-10.0, 10.0)
+
+
+class ConvDecoder(nn.Module):
+    """Mirror of ConvEncoder: linear to a (C, s/16, s/16) map, 4 stride-2 transposed convs, sigmoid."""
+
+    def __init__(
+        self,
+        out_channels: int,
+        image_size: int = 64,
+        latent_dim: int = 8,
+        channels: Sequence[int] = DEFAULT_CHANNELS,
+    ) -> None:
+        super().__init__()
+        _check_image_size(image_size)
+        widths = list(channels)[::-1]
+        self.start = (widths[0], image_size // 16, image_size // 16)
+        self.fc = nn.Linear(latent_dim, widths[0] * (image_size // 16) ** 2)
+        layers: list[nn.Module] = [nn.ReLU(inplace=True)]
+        for prev, width in zip(widths, [*widths[1:], out_channels], strict=True):
+            layers += [
+                nn.ConvTranspose2d(prev, width, kernel_size=4, stride=2, padding=1),
+                nn.ReLU(inplace=True),
+            ]
+        layers[-1] = nn.Sigmoid()
+        self.deconv = nn.Sequential(*layers)
+
+    def forward(self, z: Tensor) -> Tensor:
+        return self.deconv(self.fc(z).view(-1, *self.start))
+
+
+class ConvVAE(nn.Module):
+    """VAE over (N, in_channels, image_size, image_size) inputs in [0, 1]; Gaussian latent of latent_dim."""
+
+    def __init__(
+        self,
+        in_channels: int,
+        image_size: int = 64,
+        latent_dim: int = 8,
+        channels: Sequence[int] = DEFAULT_CHANNELS,
+    ) -> None:
+        super().__init__()
+        self.in_channels = in_channels
+        self.image_size = image_size
+        self.latent_dim = latent_dim
+        self.channels = tuple(channels)
+        self.encoder = ConvEncoder(in_channels, image_size, latent_dim, channels)
+        self.decoder = ConvDecoder(in_channels, image_size, latent_dim, channels)
+
+    def forward(self, x: Tensor, generator: torch.Generator | None = None) -> tuple[Tensor, Tensor, Tensor]:
+        """Returns (reconstruction, mu, logvar); z is sampled with `generator` for reproducibility."""
+        mu, logvar = self.encoder(x)
+        eps = torch.randn(mu.shape, generator=generator, dtype=mu.dtype, device=mu.device)
+        z = mu + eps * torch.exp(0.5 * logvar)
+        return self.decoder(z), mu, logvar
+
+
+@dataclass(frozen=True)
+class VaeLoss:
+    """Per-image loss terms, averaged over the batch (nats for KL; squared [0,1] units summed over pixels)."""
+
+    total: Tensor
+    recon: Tensor
+    kl: Tensor
+
+
+def vae_loss(recon: Tensor, x: Tensor, mu: Tensor, logvar: Tensor, beta: float = 1.0) -> VaeLoss:
+    """Summed squared error per image + beta * KL(q(z|x) || N(0, I)), both averaged over the batch.
+
+    Squared error rather than Bernoulli because inputs are continuous intensities / heights, not binary: the
+    Bernoulli likelihood has a non-zero, input-dependent floor on such targets, so its recon figure is not
+    comparable across data. The summed squared error is the Gaussian NLL with variance 1/2 (up to a constant),
+    so beta=1 is the ELBO of that model and the recon/KL balance is independent of the batch size.
+    """
+    n = x.shape[0]
+    recon_term = (recon - x).pow(2).sum() / n
+    kl_term = -0.5 * (1.0 + logvar - mu.pow(2) - logvar.exp()).sum() / n
+    return VaeLoss(recon_term + beta * kl_term, recon_term, kl_term)
+
+
+def encoder_config(model: ConvVAE, modality: str, input_shape: Sequence[int], **extra: Any) -> dict[str, Any]:
+    """The JSON written beside encoder.pt: everything needed to rebuild the encoder and feed it raw arrays."""
+    return {
+        "format_version": ENCODER_FORMAT_VERSION,
+        "modality": modality,
+        "in_channels": model.in_channels,
+        "image_size": model.image_size,
+        "latent_dim": model.latent_dim,
+        "channels": list(model.channels),
+        "normalisation": Normalisation.for_modality(modality).to_dict(),
+        "input_shape": [int(s) for s in input_shape],  # one raw frame as logged: (H, W, 3) or (R, C)
+        **extra,
+    }
+
+
+def _atomic_write(path: Path, write: Any) -> None:
+    tmp = path.with_name(f".{path.name}.tmp")
+    write(tmp)
+    os.replace(tmp, path)
+
+
+def export_encoder(model: ConvVAE, out_dir: str | Path, config: dict[str, Any]) -> None:
+    """Write <out_dir>/encoder.pt (encoder state_dict only) and encoder.json, each via temp file + rename."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    state = {k: v.detach().cpu().clone() for k, v in model.encoder.state_dict().items()}
+    _atomic_write(out / ENCODER_WEIGHTS, lambda p: torch.save(state, p))
+    _atomic_write(out / ENCODER_CONFIG, lambda p: p.write_text(json.dumps(config, indent=2) + "\n"))
+
+
+class FrozenEncoder:
+    """The trained encoder for inference: raw sensor arrays in, posterior means out; never trains."""
+
+    def __init__(self, encoder: ConvEncoder, config: dict[str, Any]) -> None:
+        self._net = encoder.eval().requires_grad_(False)
+        self.config = config
+        self.modality: str = config["modality"]
+        self.latent_dim: int = int(config["latent_dim"])
+        self.image_size: int = int(config["image_size"])
+        self.input_shape: tuple[int, ...] = tuple(config["input_shape"])
+        self.normalisation = Normalisation(**config["normalisation"])
+
+    def encode(self, batch: np.ndarray) -> np.ndarray:
+        """(N, H, W, 3) uint8 or (N, R, C) float32 -> (N, latent_dim) float32 posterior means."""
+        batch = np.asarray(batch)
+        if batch.shape[1:] != self.input_shape:
+            raise EncoderError(
+                f"{self.modality} encoder was trained on frames of shape {self.input_shape}, got batch "
+                f"{batch.shape}; match the sensor config or retrain the VAE"
+            )
+        if self.modality == "rgb" and batch.dtype != np.uint8:
+            raise EncoderError(f"rgb encoder expects uint8 frames, got {batch.dtype}")
+        x = preprocess(batch, self.modality, self.image_size, self.normalisation)
+        with torch.inference_mode():
+            mu, _ = self._net(torch.from_numpy(x))
+        return mu.numpy().astype(np.float32, copy=False)
+
+
+def load_encoder(directory: str | Path) -> FrozenEncoder:
+    """Rebuild the exported encoder from <directory>/encoder.{pt,json}, in eval mode with gradients off."""
+    directory = Path(directory)
+    weights, cfg_path = directory / ENCODER_WEIGHTS, directory / ENCODER_CONFIG
+    for path in (cfg_path, weights):
+        if not path.is_file():
+            raise EncoderError(f"encoder file not found: {path} (run the train_vae stage first)")
+    try:
+        config = json.loads(cfg_path.read_text())
+        encoder = ConvEncoder(
+            int(config["in_channels"]),
+            int(config["image_size"]),
+            int(config["latent_dim"]),
+            tuple(config["channels"]),
+        )
+        encoder.load_state_dict(torch.load(weights, map_location="cpu", weights_only=True))
+    except (json.JSONDecodeError, KeyError, TypeError, RuntimeError) as exc:
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise EncoderError(f"{directory}: encoder files are inconsistent or corrupt ({first})") from None
+    return FrozenEncoder(encoder, config)
