@@ -135,7 +135,7 @@ class VaeConfig(_Section):
 
     modality: Sensor = "heightmap"
     latent_dim: PositiveInt = 8
-    beta: Annotated[float, Field(ge=0)] = 1.0
+    beta: Annotated[float, Field(ge=0)] = 0.25  # 1.0 gave a linear probe of 0.87; 0.25 gives 0.94 (reports/vae)
     image_size: PositiveInt = 64  # inputs are resized to image_size x image_size
     epochs: PositiveInt = 30
     batch_size: PositiveInt = 64
@@ -163,8 +163,10 @@ class PpoConfig(_Section):
     net_arch: tuple[PositiveInt, ...] = (64, 64)
     seed: int = 0
     blind: bool = False  # drop the terrain embedding (ablation)
-    train_terrains: tuple[str, ...] = ("single_block",)
-    randomize: bool = False  # use TaskConfig.randomization during training
+    # the paper trained on single_block alone; adding random_blocks and friction/mass randomisation is what
+    # makes the policy cross the wide block (set train_terrains: [single_block], randomize: false for the paper)
+    train_terrains: tuple[str, ...] = ("single_block", "random_blocks")
+    randomize: bool = True  # draw friction and base mass from task.randomization at every reset
     checkpoint_every: PositiveInt = 20_000
     encoder_dir: str = "data/models/vae"
     out_dir: str = "data/models/ppo"

@@ -12,6 +12,8 @@ from typing import Any
 
 from hexpipe.config import Params
 
+VAE_HEADLINES = ("probe_accuracy", "probe_baseline", "probe_threshold_accuracy", "probe_knn_accuracy", "epochs")
+
 
 def _read(path: Path) -> dict[str, Any] | None:
     return json.loads(path.read_text()) if path.is_file() else None
@@ -58,7 +60,7 @@ def build_summary(params: Params, collect_report: Path, root: Path) -> str:
         lines += ["*(not run yet)*", ""]
     else:
         flat = {**{f"val/{k}": v for k, v in vae.get("val", {}).items()},
-                **{k: vae[k] for k in ("probe_accuracy", "probe_baseline", "epochs") if k in vae},
+                **{k: vae[k] for k in VAE_HEADLINES if k in vae},
                 "train/images_per_s": vae.get("train", {}).get("images_per_s")}
         vae_cfg = params.vae
         lines += [f"Modality: `{vae_cfg.modality}`, latent size {vae_cfg.latent_dim}, beta {vae_cfg.beta}.", "",
