@@ -249,7 +249,10 @@ def linear_probe(
     """Logistic regression on standardised latents (L-BFGS, L2 on weights) -> (val accuracy, baseline).
 
     The baseline is the best constant predictor on val, max(p, 1 - p), so the probe must beat class imbalance.
+    Both are NaN when there is nothing to fit or score.
     """
+    if len(y_val) == 0 or len(y_train) == 0:
+        return math.nan, math.nan
     mean, std = x_train.mean(0), x_train.std(0) + 1e-6
     xt = torch.from_numpy(((x_train - mean) / std).astype(np.float32))
     xv = torch.from_numpy(((x_val - mean) / std).astype(np.float32))
@@ -267,7 +270,7 @@ def linear_probe(
     opt.step(closure)
     with torch.no_grad():
         predicted = (xv @ w + b > 0).numpy()
-    positive_rate = float(y_val.mean()) if len(y_val) else 0.0
+    positive_rate = float(y_val.mean())
     return float((predicted == y_val.astype(bool)).mean()), max(positive_rate, 1.0 - positive_rate)
 
 
@@ -515,8 +518,9 @@ def train_vae(cfg: VaeConfig, frames: Iterable[Frame] | None = None) -> dict[str
     # stricter threshold probe below keeps them as negatives and is reported beside it.
     two_class = block_ahead | ~np.isfinite(data.obstacle_distance)
     tr, va = train_idx[two_class[train_idx]], val_idx[two_class[val_idx]]
-    probe_accuracy, probe_baseline = linear_probe(latent_means(model, data, tr), block_ahead[tr],
-                                                  latent_means(model, data, va), block_ahead[va])
+    probe_accuracy, probe_baseline = linear_probe(
+        latent_means(model, data, tr), block_ahead[tr], latent_means(model, data, va), block_ahead[va]
+    )
     threshold_accuracy, threshold_baseline = linear_probe(
         train_mu, block_ahead[train_idx], val_mu, block_ahead[val_idx]
     )
