@@ -9,7 +9,6 @@ atomically after every finished episode: it never lists a file that cannot be re
 
 from __future__ import annotations
 
-import hashlib
 import json
 import time
 from collections.abc import Callable
@@ -21,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from hexpipe.config import Params
+from hexpipe.config import Params, params_hash
 from hexpipe.envs.hexapod import HexapodEnv
 
 MANIFEST = "manifest.json"
@@ -50,12 +49,7 @@ def plan_episodes(params: Params) -> list[EpisodePlan]:
 
 def dataset_signature(params: Params) -> str:
     """Hash of everything that changes the episodes' content; a manifest with another signature is stale."""
-    relevant = {
-        "sim": params.sim.model_dump(mode="json"), "cpg": params.cpg.model_dump(mode="json"),
-        "sensors": params.sensors.model_dump(mode="json"), "task": params.task.model_dump(mode="json"),
-        "collect": params.collect.model_dump(mode="json", exclude={"workers", "episodes", "out_dir"}),
-    }
-    return hashlib.sha256(json.dumps(relevant, sort_keys=True).encode()).hexdigest()[:16]
+    return params_hash(params, collect={"workers", "episodes", "out_dir"})
 
 
 def make_env(params: Params, terrain: str) -> HexapodEnv:
@@ -126,18 +120,19 @@ def read_manifest(out_dir: Path) -> dict[str, Any] | None:
 
 
 def write_manifest(out_dir: Path, signature: str, rows: list[dict[str, Any]]) -> None:
+    """Rewrite the manifest atomically; wall-clock timings stay out so the dataset is byte-for-byte reproducible."""
+    episodes = [{k: v for k, v in r.items() if k != "seconds"} for r in sorted(rows, key=lambda r: r["index"])]
     tmp = out_dir / (MANIFEST + ".tmp")
-    tmp.write_text(json.dumps({"signature": signature, "episodes": sorted(rows, key=lambda r: r["index"])}, indent=1))
+    tmp.write_text(json.dumps({"signature": signature, "episodes": episodes}, indent=1))
     tmp.replace(out_dir / MANIFEST)
 
 
-def bare_step_rate(params: Params, plan: EpisodePlan) -> float:
-    """Steps/s of one planned episode run exactly as collect runs it, sensors included, but writing nothing.
-
-    The ratio of collect's rate to this one is the cost of logging to MCAP.
+def bare_step_rate(pool: ProcessPoolExecutor, params: Params, plans: list[EpisodePlan]) -> float:
+    """Steps/s per worker of planned episodes run exactly as collect runs them, sensors included, writing nothing,
+    one per worker at once (the same parallel load as collection). collect's rate over this is the cost of logging.
     """
-    row = run_episode(params, plan, out_dir=None)
-    return row["steps"] / row["seconds"]
+    rows = [f.result() for f in [pool.submit(run_episode, params, plan, None) for plan in plans]]
+    return sum(r["steps"] for r in rows) / sum(r["seconds"] for r in rows)
 
 
 def collect(params: Params, on_episode: Callable[[int, int], None] | None = None) -> dict[str, Any]:
@@ -159,12 +154,12 @@ def collect(params: Params, on_episode: Callable[[int, int], None] | None = None
     write_manifest(out_dir, signature, list(done.values()))
 
     pending = [p for p in plans if p.file not in done]
-    bare = bare_step_rate(params, pending[0] if pending else plans[0])
-    start = time.perf_counter()
     ran: list[dict[str, Any]] = []
     if on_episode:
         on_episode(len(done), len(plans))
     with ProcessPoolExecutor(max_workers=cfg.workers, mp_context=get_context("fork")) as pool:
+        bare = bare_step_rate(pool, params, (pending or plans)[: cfg.workers])
+        start = time.perf_counter()
         futures = [pool.submit(run_episode, params, plan, out_dir) for plan in pending]
         try:
             for future in as_completed(futures):

@@ -6,6 +6,8 @@
 
 from __future__ import annotations
 
+import hashlib
+import json
 import math
 from pathlib import Path
 from typing import Annotated, Any, Literal
@@ -202,6 +204,15 @@ class Params(_Section):
     vae: VaeConfig = VaeConfig()
     ppo: PpoConfig = PpoConfig()
     eval: EvalConfig = EvalConfig()
+
+
+def params_hash(params: Params, **stage_excludes: set[str]) -> str:
+    """Short hash of the simulation sections (sim, cpg, sensors, task) plus each named stage section minus the
+    given keys: artifacts record it, so that resuming under other params is refused."""
+    parts = {name: getattr(params, name).model_dump(mode="json") for name in ("sim", "cpg", "sensors", "task")}
+    for name, exclude in stage_excludes.items():
+        parts[name] = getattr(params, name).model_dump(mode="json", exclude=exclude)
+    return hashlib.sha256(json.dumps(parts, sort_keys=True).encode()).hexdigest()[:16]
 
 
 def _set_dotted(tree: dict[str, Any], dotted: str, value: Any) -> None:

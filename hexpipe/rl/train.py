@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import hashlib
 import json
 import shutil
 import time
@@ -14,7 +13,7 @@ import numpy as np
 from stable_baselines3 import PPO
 from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecEnv, VecNormalize
 
-from hexpipe.config import Params
+from hexpipe.config import Params, params_hash
 from hexpipe.envs.hexapod import HexapodEnv
 from hexpipe.rl.checkpoint import MODEL, NORMALISATION, latest_checkpoint, save_checkpoint, save_policy
 from hexpipe.rl.features import TerrainFeatures
@@ -86,12 +85,7 @@ def policy_config(params: Params, encoder, observation_dim: int) -> dict[str, An
 
 def training_signature(params: Params) -> str:
     """Hash of everything a checkpoint depends on except the budget: resuming under other params is refused."""
-    relevant = {
-        "sim": params.sim.model_dump(mode="json"), "cpg": params.cpg.model_dump(mode="json"),
-        "sensors": params.sensors.model_dump(mode="json"), "task": params.task.model_dump(mode="json"),
-        "ppo": params.ppo.model_dump(mode="json", exclude={"total_timesteps", "checkpoint_every", "report_dir"}),
-    }
-    return hashlib.sha256(json.dumps(relevant, sort_keys=True).encode()).hexdigest()[:16]
+    return params_hash(params, ppo={"total_timesteps", "checkpoint_every", "report_dir"})
 
 
 def prepare_checkpoints(checkpoints: Path, signature: str, resume: bool) -> Path | None:
