@@ -12,7 +12,7 @@ from stable_baselines3.common.vec_env import DummyVecEnv
 from hexpipe.config import Params, load_params
 from hexpipe.envs.hexapod import HexapodEnv
 from hexpipe.evaluation.metrics import rank_gaits
-from hexpipe.evaluation.run import evaluate
+from hexpipe.evaluation.run import GRID_SEEDS, evaluate
 from hexpipe.evaluation.video import count_frames
 from hexpipe.models.vae import ConvVAE, encoder_config, export_encoder
 from hexpipe.recording.reader import count_messages, read_metadata
@@ -71,7 +71,9 @@ def test_evaluate_writes_metrics_report_recordings_and_video(blind):
     assert (fixed["a_mean"], fixed["b_mean"]) == pytest.approx((0.3, 0.3))  # the 1-point grid's gait, held
 
     rows = pd.read_csv(report / "results.csv")
-    assert len(rows) == 2 * 4 * 2 + 3  # terrains x controllers x episodes, plus the grid's 3 seeds
+    grid_rows = len(blind.ppo.train_terrains) * GRID_SEEDS  # the 1-gait grid, on every training terrain
+    assert len(rows) == 2 * 4 * 2 + grid_rows  # terrains x controllers x episodes, plus the grid
+    assert set(rows.loc[rows["controller"] == "grid", "terrain"]) == set(blind.ppo.train_terrains)
     evaluated = rows[rows["controller"] != "grid"]
     assert set(evaluated.groupby("controller")["seed"].apply(tuple)) == {(1000, 1001, 1000, 1001)}  # same seeds
     assert set(rows.loc[rows["controller"] == "grid", "seed"]).isdisjoint({1000, 1001})
