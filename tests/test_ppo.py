@@ -11,7 +11,7 @@ from hexpipe.config import Params, load_params
 from hexpipe.envs.hexapod import HexapodEnv
 from hexpipe.models.vae import ConvVAE, encoder_config, export_encoder
 from hexpipe.rl.features import TerrainFeatures
-from hexpipe.rl.train import train_ppo
+from hexpipe.rl.train import first_time_success_rate, train_ppo
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -84,3 +84,10 @@ def test_resume_continues_and_changed_params_start_over(tmp_path):
     other = tiny(tmp_path, "ppo.blind=true", "ppo.n_envs=1", "ppo.learning_rate=0.001")
     metrics = train_ppo(other, resume=True, show_progress=False)
     assert metrics["timesteps"] == 256  # the old checkpoint was made under other params: not resumed
+
+
+def test_timesteps_to_success_rate_is_the_first_window_that_reaches_it():
+    episodes = [{"success": s, "timesteps": 100 * (i + 1)} for i, s in enumerate([0, 1, 1, 0, 1, 1, 1])]
+    assert first_time_success_rate(episodes, threshold=0.6, window=3) == 300
+    assert first_time_success_rate(episodes, threshold=1.0, window=3) == 700
+    assert first_time_success_rate(episodes, threshold=1.0, window=8) is None

@@ -159,7 +159,7 @@ def train_ppo(params: Params, resume: bool = False, show_progress: bool = True) 
         "time/train_steps_per_s": train_rate,
         "time/bare_env_steps_per_s": bare_rate,
         "time/train_vs_bare": train_rate / bare_rate,
-        "episode/timesteps_to_90pct_success": first_sustained_success(stats.episodes, threshold=0.9, window=20),
+        "episode/timesteps_to_90pct_success": first_time_success_rate(stats.episodes, threshold=0.9, window=20),
     }
     for name, value in metrics.items():
         if value is not None and name != "timesteps":
@@ -199,7 +199,7 @@ def training_curve(episodes: list[dict[str, Any]], path: Path, window: int = 20)
     tmp.replace(path)
 
 
-def first_sustained_success(episodes: list[dict[str, Any]], threshold: float, window: int) -> int | None:
+def first_time_success_rate(episodes: list[dict[str, Any]], threshold: float, window: int) -> int | None:
     """Timesteps at which the success rate over the last `window` finished episodes first reached `threshold`."""
     for end in range(window, len(episodes) + 1):
         if np.mean([e["success"] for e in episodes[end - window:end]]) >= threshold:
