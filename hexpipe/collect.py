@@ -24,6 +24,7 @@ from hexpipe.config import Params, params_hash
 from hexpipe.envs.hexapod import HexapodEnv
 
 MANIFEST = "manifest.json"
+TIMINGS = ("seconds", "env_seconds")  # wall-clock figures: reported, never in the (reproducible) manifest
 
 
 @dataclass(frozen=True)
@@ -58,54 +59,47 @@ def make_env(params: Params, terrain: str) -> HexapodEnv:
     return HexapodEnv(terrain, sim=params.sim, cpg=params.cpg, sensors=params.sensors, task=task)
 
 
-class _SenseOnly:
-    """Stands in for EpisodeLog when measuring the bare rate: same sensor reads on the kept steps, no writing."""
-
-    def __init__(self, env: HexapodEnv, log_every: int):
-        self.env, self.log_every, self.frames = env, log_every, 0
-
-    def step(self, reward: float, info: dict[str, Any], force: bool = False) -> None:
-        if force or self.env.steps % self.log_every == 0:
-            self.env.sense(("rgb", "heightmap"))
-            self.frames += 1
-
-
-def _rollout(params: Params, plan: EpisodePlan, env: HexapodEnv, log: Any) -> dict[str, Any]:
+def _rollout(params: Params, plan: EpisodePlan, env: HexapodEnv, log: Any) -> tuple[dict[str, Any], float]:
+    """Run the episode; returns the last info and the seconds spent in env.step alone (the bare env's share)."""
     cfg = params.collect
     rng = np.random.default_rng(plan.seed)
     max_steps = round(cfg.max_seconds * params.sim.control_hz)
     info = env.last_info
+    env_seconds = 0.0
     log.step(0.0, info, force=True)
     for _ in range(max_steps):
         action = rng.uniform(-cfg.action_scale, cfg.action_scale, size=3)
+        tick = time.perf_counter()
         _, reward, terminated, truncated, info = env.step(action)
+        env_seconds += time.perf_counter() - tick
         ended = terminated or truncated or env.steps >= max_steps
         log.step(reward, info, force=ended)
         if ended:
             break
-    return info
+    return info, env_seconds
 
 
-def run_episode(params: Params, plan: EpisodePlan, out_dir: Path | None) -> dict[str, Any]:
-    """Roll out one random-policy episode and log it to out_dir (None: sense but write nothing, for timing)."""
+def run_episode(params: Params, plan: EpisodePlan, out_dir: Path) -> dict[str, Any]:
+    """Roll out one random-policy episode and log it to out_dir.
+
+    Times the episode twice over: `seconds` in all, `env_seconds` inside env.step only. The difference is what
+    logging costs (sensor reads on kept steps, encoding, writing), measured on the very same steps and load.
+    """
     from hexpipe.recording.episode import EpisodeLog, episode_metadata
 
     env = make_env(params, plan.terrain)
     env.reset(seed=plan.seed)
     start = time.perf_counter()
-    if out_dir is None:
-        log = _SenseOnly(env, params.collect.log_every)
-        info = _rollout(params, plan, env, log)
-    else:
-        metadata = episode_metadata(env, plan.seed, params.model_dump_json(), index=plan.index, policy="random")
-        with EpisodeLog(env, out_dir / plan.file, metadata, log_every=params.collect.log_every) as log:
-            info = _rollout(params, plan, env, log)
+    metadata = episode_metadata(env, plan.seed, params.model_dump_json(), index=plan.index, policy="random")
+    with EpisodeLog(env, out_dir / plan.file, metadata, log_every=params.collect.log_every) as log:
+        info, env_seconds = _rollout(params, plan, env, log)
     seconds = time.perf_counter() - start
     env.close()
     return {
         **asdict(plan), "file": plan.file, "frames": log.frames, "steps": env.steps,
         "distance": round(info["distance"], 4), "termination": info["termination"] or "time_limit",
-        "bytes": (out_dir / plan.file).stat().st_size if out_dir else 0, "seconds": round(seconds, 3),
+        "bytes": (out_dir / plan.file).stat().st_size, "seconds": round(seconds, 4),
+        "env_seconds": round(env_seconds, 4),
     }
 
 
@@ -121,18 +115,10 @@ def read_manifest(out_dir: Path) -> dict[str, Any] | None:
 
 def write_manifest(out_dir: Path, signature: str, rows: list[dict[str, Any]]) -> None:
     """Rewrite the manifest atomically; wall-clock timings stay out so the dataset is byte-for-byte reproducible."""
-    episodes = [{k: v for k, v in r.items() if k != "seconds"} for r in sorted(rows, key=lambda r: r["index"])]
+    episodes = [{k: v for k, v in r.items() if k not in TIMINGS} for r in sorted(rows, key=lambda r: r["index"])]
     tmp = out_dir / (MANIFEST + ".tmp")
     tmp.write_text(json.dumps({"signature": signature, "episodes": episodes}, indent=1))
     tmp.replace(out_dir / MANIFEST)
-
-
-def bare_step_rate(pool: ProcessPoolExecutor, params: Params, plans: list[EpisodePlan]) -> float:
-    """Steps/s per worker of planned episodes run exactly as collect runs them, sensors included, writing nothing,
-    one per worker at once (the same parallel load as collection). collect's rate over this is the cost of logging.
-    """
-    rows = [f.result() for f in [pool.submit(run_episode, params, plan, None) for plan in plans]]
-    return sum(r["steps"] for r in rows) / sum(r["seconds"] for r in rows)
 
 
 def collect(params: Params, on_episode: Callable[[int, int], None] | None = None) -> dict[str, Any]:
@@ -158,7 +144,6 @@ def collect(params: Params, on_episode: Callable[[int, int], None] | None = None
     if on_episode:
         on_episode(len(done), len(plans))
     with ProcessPoolExecutor(max_workers=cfg.workers, mp_context=get_context("fork")) as pool:
-        bare = bare_step_rate(pool, params, (pending or plans)[: cfg.workers])
         start = time.perf_counter()
         futures = [pool.submit(run_episode, params, plan, out_dir) for plan in pending]
         try:
@@ -174,12 +159,10 @@ def collect(params: Params, on_episode: Callable[[int, int], None] | None = None
                 f.cancel()
             raise
     wall = time.perf_counter() - start
-    return collect_report(list(done.values()), ran, bare, wall, cfg.workers)
+    return collect_report(list(done.values()), ran, wall, cfg.workers)
 
 
-def collect_report(
-    rows: list[dict[str, Any]], ran: list[dict[str, Any]], bare_rate: float, wall: float, workers: int
-) -> dict[str, Any]:
+def collect_report(rows: list[dict[str, Any]], ran: list[dict[str, Any]], wall: float, workers: int) -> dict[str, Any]:
     """Dataset figures (all episodes) and throughput (the episodes run now) for reports/collect.json."""
     import pandas as pd
 
@@ -194,6 +177,7 @@ def collect_report(
     if ran:
         recent = pd.DataFrame(ran)
         per_worker_rate = float(recent["steps"].sum() / recent["seconds"].sum())
+        bare_rate = float(recent["steps"].sum() / recent["env_seconds"].sum())
         report.update({
             "episodes_run_now": len(recent), "wall_seconds": round(wall, 2), "workers": workers,
             "frames_per_s": round(float(recent["frames"].sum()) / wall, 2),
