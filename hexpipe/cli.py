@@ -89,9 +89,11 @@ def collect(
         with user_errors():
             result = run_collect(cfg, on_episode=lambda done, total: bar.update(task, completed=done, total=total))
     write_json(report, result)
+    rate = result.get("logging_rate_vs_bare")
     console.print(
         f"collect: {result['episodes']} episodes, {result['frames']} frames, {result['bytes'] / 1e6:.1f} MB in "
-        f"{cfg.collect.out_dir}; logging keeps {result.get('logging_rate_vs_bare', 1.0):.0%} of the bare env rate"
+        f"{cfg.collect.out_dir}; "
+        + (f"logging keeps {rate:.0%} of the bare env rate" if rate else "every episode was already there")
     )
 
 
