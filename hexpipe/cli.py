@@ -135,6 +135,9 @@ def evaluate(
     terrain: Annotated[
         list[str] | None, typer.Option("--terrain", help="extra terrain name or YAML file (repeatable)")
     ] = None,
+    write_page: Annotated[
+        bool, typer.Option("--summary/--no-summary", help="also rewrite reports/README.md (off for side experiments)")
+    ] = True,
 ) -> None:
     """Run the policy and baselines on the terrain suite; writes reports/eval (metrics, report, figures, videos)."""
     from hexpipe.evaluation.run import evaluate as run_evaluate
@@ -144,7 +147,8 @@ def evaluate(
     with user_errors():
         summary_text = run_evaluate(cfg, extra_terrains=tuple(terrain or ()))
     console.print(summary_text)
-    console.print(f"wrote {write_summary(cfg, Path('reports/collect.json'), Path('reports/README.md'))}")
+    if write_page:
+        console.print(f"wrote {write_summary(cfg, Path('reports/collect.json'), Path('reports/README.md'))}")
 
 
 @app.command()
