@@ -118,6 +118,7 @@ class TaskConfig(_Section):
     fall_height: PositiveFloat = 0.07  # base height above the terrain below which the robot has fallen (m)
     fall_tilt: Annotated[float, Field(gt=0, le=math.pi)] = 1.0  # |roll| or |pitch| beyond this is a fall (rad)
     reward_scale: PositiveFloat = 100.0  # reward = reward_scale * forward velocity (m/s), as in the paper
+    power_cost: Annotated[float, Field(ge=0)] = 0.0  # minus this much reward per W of joint power; 0 = the paper
     randomization: RandomizationConfig = RandomizationConfig()
 
 

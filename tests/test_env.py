@@ -155,3 +155,34 @@ def test_sensor_config_shapes_observation():
     obs, _ = env.reset(seed=0)
     assert obs["rgb"].shape == (32, 48, 3) and obs["heightmap"].shape == (16 * 8,)
     env.close()
+
+
+# -- the reward: the paper's term, and the optional power cost ---------------------------------------------------
+def test_reward_is_the_papers_unless_power_costs_something():
+    rewards = {}
+    for cost in (0.0, 0.1):
+        env = HexapodEnv("flat", task=TaskConfig(sensors=(), power_cost=cost))
+        env.reset(seed=0)
+        for _ in range(30):
+            _, reward, _, _, info = env.step(np.zeros(3))
+        terms = info["reward_terms"]
+        assert reward == pytest.approx(sum(terms.values()))
+        assert info["power"] > 1.0 and info["energy"] > 0.0  # the legs do work while walking
+        assert terms["power"] == pytest.approx(-cost * info["power"])
+        rewards[cost] = (reward, terms["forward"])
+        env.close()
+    assert rewards[0.0][0] == pytest.approx(rewards[0.0][1])  # 100 * v_x alone
+    assert rewards[0.1][0] < rewards[0.1][1]
+
+
+def test_a_high_gait_costs_more_energy_per_metre_on_flat():
+    """Why the power cost makes lifting a choice: on open ground the high gait only spends more."""
+    from hexpipe.envs.rewards import cost_of_transport
+
+    cot = {}
+    for gait in (LOW_GAIT, HIGH_GAIT):
+        env = HexapodEnv("flat", initial_cpg=gait, task=TaskConfig(sensors=(), time_limit=8.0))
+        info = rollout(env, seed=0)
+        cot[gait] = cost_of_transport(info["energy"], env.robot_spec.total_mass, info["distance"])
+        env.close()
+    assert cot[HIGH_GAIT] > 1.2 * cot[LOW_GAIT]

@@ -7,7 +7,8 @@ Observation (Dict):
 - `heightmap` (rows * cols,) float32 m, row-major (reshape with `env.heightmap.shape`; flat because SB3 expects
   1-D vectors or images), and/or `rgb` (H, W, 3) uint8, as selected by `TaskConfig.sensors`.
 Action: Box [-1, 1]^3, scaled by `CpgConfig.accel_limit` to d^2/dt^2 (a, b, omega).
-Reward: `reward_scale` * forward velocity (m/s, displacement over the control step), as in the paper.
+Reward: `reward_scale` * forward velocity (m/s, displacement over the control step), as in the paper, minus
+`power_cost` * mean mechanical joint power (W) when that is set (0 is the paper's reward).
 Terminates on `goal` (3 m forward), `stuck` (too little progress over a window), `fall` (tilt or base too low)
 or `nonfinite` physics; truncates at the time limit. `info` carries distance, success, termination and the
 reward terms.
@@ -25,6 +26,7 @@ import numpy as np
 from gymnasium import spaces
 
 from hexpipe.config import CpgConfig, SensorConfig, SimConfig, TaskConfig
+from hexpipe.envs.rewards import forward_velocity_reward, power_penalty
 from hexpipe.sim.cpg import CPG
 from hexpipe.sim.gait import GaitMap, slew_limit
 from hexpipe.sim.robot import Robot, RobotSpec
@@ -32,11 +34,6 @@ from hexpipe.sim.sensors import Camera, HeightMapSensor
 from hexpipe.sim.terrain import Terrain, TerrainRecipe, load_terrain, realize
 
 TERMINATIONS = ("goal", "stuck", "fall", "nonfinite")
-
-
-def forward_velocity_reward(dx: float, dt: float, scale: float) -> float:
-    """The paper's reward: scale * forward velocity (m/s) over the last control step."""
-    return scale * dx / dt
 
 
 def quat_to_roll_pitch(q: np.ndarray) -> tuple[float, float]:
@@ -158,6 +155,7 @@ class HexapodEnv(gym.Env):
         self._last_x = float(pos[0])
         self._progress = deque([float(pos[0])], maxlen=self._stuck_steps + 1)
         self.steps = 0
+        self.energy = 0.0  # J of mechanical joint work since reset
         self.last_info = self._info(pos, reward_terms={}, termination=None)
         return self._observation(), self.last_info
 
@@ -166,11 +164,13 @@ class HexapodEnv(gym.Env):
         accel = np.clip(np.asarray(action, dtype=float), -1.0, 1.0) * self._accel_limit
         p, c = self._p, self.client
         gains = (self.sim_cfg.position_gain, self.sim_cfg.velocity_gain)
+        power = 0.0
         for _ in range(self.substeps):
             xy = self.cpg.step(accel, self.physics_dt)
             self._targets = slew_limit(self._targets, self.gait.joint_targets(xy), self._max_joint_step)
             self.robot.command(self._targets, *gains)
             p.stepSimulation(physicsClientId=c)
+            power += self.robot.mechanical_power() / self.substeps
         self.steps += 1
 
         pos, quat, lin, _ = self.robot.base_state()
@@ -183,11 +183,17 @@ class HexapodEnv(gym.Env):
             self._last_x = float(pos[0])
             self._progress.append(float(pos[0]))
             termination = self._termination(pos, quat)
-        reward = forward_velocity_reward(dx, self.control_dt, self.task.reward_scale)
-        terms = {"forward_velocity": dx / self.control_dt, "reward_forward": reward}
+        if not math.isfinite(power):
+            power = 0.0
+        self.energy += power * self.control_dt
+        terms = {
+            "forward": forward_velocity_reward(dx, self.control_dt, self.task.reward_scale),
+            "power": power_penalty(power, self.task.power_cost),
+        }
+        reward = sum(terms.values())
         truncated = termination is None and self.steps >= self.max_steps
         obs = self._observation() if termination != "nonfinite" else self._zero_observation()
-        self.last_info = self._info(pos, terms, termination)
+        self.last_info = self._info(pos, terms, termination, power)
         return obs, reward, termination is not None, truncated, self.last_info
 
     def _termination(self, pos: np.ndarray, quat: np.ndarray) -> str | None:
@@ -240,7 +246,9 @@ class HexapodEnv(gym.Env):
     def _zero_observation(self) -> dict[str, np.ndarray]:
         return {k: np.zeros(s.shape, dtype=s.dtype) for k, s in self.observation_space.spaces.items()}
 
-    def _info(self, pos: np.ndarray, reward_terms: dict[str, float], termination: str | None) -> dict[str, Any]:
+    def _info(
+        self, pos: np.ndarray, reward_terms: dict[str, float], termination: str | None, power: float = 0.0
+    ) -> dict[str, Any]:
         distance = float(pos[0] - self.start_xy[0]) if np.all(np.isfinite(pos)) else 0.0
         return {
             "distance": distance,
@@ -249,6 +257,8 @@ class HexapodEnv(gym.Env):
             "time": self.steps * self.control_dt,
             "cpg": self.cpg.params.copy(),
             "reward_terms": reward_terms,
+            "power": power,  # W, mean mechanical joint power over the last control step
+            "energy": self.energy,  # J since reset
         }
 
     # -- extras for logging and video --------------------------------------------------------------------------

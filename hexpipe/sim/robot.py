@@ -250,6 +250,11 @@ class Robot:
         q, dq, _, tau = zip(*states, strict=True)
         return np.array(q), np.array(dq), np.array(tau)
 
+    def mechanical_power(self) -> float:
+        """Sum over the 18 joints of |torque * velocity| (W): what the actuators spend, braking counted as cost."""
+        states = self._p.getJointStates(self.body, self.joints, physicsClientId=self.client)
+        return float(sum(abs(s[1] * s[3]) for s in states))
+
     def link_poses(self) -> list[tuple[np.ndarray, np.ndarray]]:
         """World pose (position, quaternion xyzw) of every link frame, base first."""
         pos, orn = self._p.getBasePositionAndOrientation(self.body, physicsClientId=self.client)

@@ -1,0 +1,21 @@
+"""Reward terms and the cost of transport: pure functions with units."""
+
+import pytest
+
+from hexpipe.envs.rewards import GRAVITY, cost_of_transport, forward_velocity_reward, power_penalty
+
+
+def test_forward_velocity_reward_is_scaled_velocity():
+    assert forward_velocity_reward(0.015, 0.05, 100.0) == pytest.approx(30.0)  # 0.3 m/s
+    assert forward_velocity_reward(-0.005, 0.05, 100.0) == pytest.approx(-10.0)  # walking back is penalised
+
+
+def test_power_penalty_is_linear_in_watts_and_free_at_zero_cost():
+    assert power_penalty(80.0, 0.0) == 0.0
+    assert power_penalty(80.0, 0.1) == pytest.approx(-8.0)
+    assert power_penalty(160.0, 0.1) == pytest.approx(2 * power_penalty(80.0, 0.1))
+
+
+def test_cost_of_transport_is_energy_per_weight_and_distance():
+    assert cost_of_transport(20.0 * GRAVITY * 3.0, 20.0, 3.0) == pytest.approx(1.0)
+    assert cost_of_transport(100.0, 20.0, 0.0) > 0  # no division by zero when the robot never moved
