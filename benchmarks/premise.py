@@ -1,4 +1,5 @@
-"""The physical premise, measured: fixed open-loop gaits (zero action) on flat ground and the training block.
+"""The physical premise, measured: fixed open-loop gaits (zero action) on flat ground and the training block,
+with the cost of transport of each run (what `task.power_cost` charges for).
 
 Usage: python benchmarks/premise.py [--seeds 2] [--out reports/premise.json]
 """
@@ -14,6 +15,7 @@ import numpy as np
 
 from hexpipe.config import TaskConfig
 from hexpipe.envs.hexapod import HexapodEnv
+from hexpipe.envs.rewards import cost_of_transport
 
 CASES = [("flat", 0.15), ("flat", 0.40), ("single_block", 0.15), ("single_block", 0.30), ("single_block", 0.40)]
 
@@ -25,8 +27,10 @@ def episode(terrain: str, b: float, seed: int) -> dict:
         _, _, terminated, truncated, info = env.step(np.zeros(3))
         if terminated or truncated:
             env.close()
+            cot = cost_of_transport(info["energy"], env.robot_spec.total_mass, info["distance"])
             return {"terrain": terrain, "b": b, "seed": seed, "termination": info["termination"],
-                    "distance_m": round(info["distance"], 3), "time_s": round(info["time"], 2)}
+                    "distance_m": round(info["distance"], 3), "time_s": round(info["time"], 2),
+                    "cost_of_transport": round(cot, 2)}
 
 
 def main() -> None:
@@ -37,7 +41,7 @@ def main() -> None:
     rows = [episode(t, b, s) for t, b in CASES for s in range(args.seeds)]
     for r in rows:
         print(f"{r['terrain']:13s} b={r['b']:.2f} seed={r['seed']}: {r['termination']} "
-              f"after {r['distance_m']:.2f} m in {r['time_s']:.1f} s")
+              f"after {r['distance_m']:.2f} m in {r['time_s']:.1f} s, cost of transport {r['cost_of_transport']:.2f}")
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(rows, indent=2) + "\n")
 

@@ -11,6 +11,7 @@ from stable_baselines3.common.vec_env import DummyVecEnv
 
 from hexpipe.config import Params, load_params
 from hexpipe.envs.hexapod import HexapodEnv
+from hexpipe.evaluation.episodes import TRACE_COLUMNS, lift_near_and_away
 from hexpipe.evaluation.metrics import rank_gaits
 from hexpipe.evaluation.run import GRID_SEEDS, evaluate
 from hexpipe.evaluation.video import count_frames
@@ -69,6 +70,7 @@ def test_evaluate_writes_metrics_report_recordings_and_video(blind):
             assert m["distance_std"] >= 0 and all(isinstance(v, int | float) for v in m.values())
     fixed = metrics["single_block"]["best_fixed"]
     assert (fixed["a_mean"], fixed["b_mean"]) == pytest.approx((0.3, 0.3))  # the 1-point grid's gait, held
+    assert fixed["b_near_block"] == pytest.approx(0.3)  # a fixed gait lifts the same everywhere
 
     rows = pd.read_csv(report / "results.csv")
     grid_rows = len(blind.ppo.train_terrains) * GRID_SEEDS  # the 1-gait grid, on every training terrain
@@ -162,3 +164,14 @@ def test_gait_ranking_prefers_success_then_distance_then_speed():
     overshoot = pd.concat([rows, pd.DataFrame([{"gait": "overshoot", "success": True, "distance": 3.02, "time": 20.0,
                                                   "termination": "goal"}])])
     assert rank_gaits(overshoot, goal_distance=3.0)["gait"].tolist()[:3] == ["fast", "overshoot", "slow"]
+
+
+def test_lift_is_split_between_steps_near_blocks_and_open_ground():
+    distance = np.linspace(0.0, 3.0, 31)  # one trace row every 0.1 m
+    b = np.where((distance >= 0.5) & (distance <= 1.8), 0.45, 0.15)  # lifts from 0.5 m before to 0.5 m past
+    trace = np.zeros((len(distance), len(TRACE_COLUMNS)), dtype=np.float32)
+    trace[:, TRACE_COLUMNS.index("distance")], trace[:, TRACE_COLUMNS.index("b")] = distance, b
+    near, away = lift_near_and_away(trace, [(1.0, 1.3)])  # a block from 1.0 to 1.3 m: near = 0.0 .. 1.8 m
+    assert away == pytest.approx(0.15)
+    assert near == pytest.approx((5 * 0.15 + 14 * 0.45) / 19, abs=1e-6)
+    assert np.isnan(lift_near_and_away(trace, [])[0])  # no block: nothing is near one

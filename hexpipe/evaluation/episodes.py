@@ -14,10 +14,14 @@ import numpy as np
 
 from hexpipe.config import Params
 from hexpipe.envs.hexapod import HexapodEnv
+from hexpipe.envs.rewards import cost_of_transport
 from hexpipe.evaluation.controllers import ControllerSpec, build, gait_label
 from hexpipe.evaluation.suite import Scenario
 
 TRACE_COLUMNS = ("time", "distance", "a", "b", "omega")  # s, m, rad, rad, rad/s
+# Where the body counts as "near a block" for the lift statistics: from this far before a block's start (m; the
+# front feet reach about 0.45 m ahead of the base) until this far past its end (the rear legs are still on it).
+NEAR_BEFORE, NEAR_AFTER = 1.0, 0.5
 
 
 @dataclass(frozen=True)
@@ -49,6 +53,18 @@ def _obstacles(env: HexapodEnv) -> list[tuple[float, float]]:
         (lo, hi), _ = hf.extent
         spans.append((lo - x0, hi - x0))
     return spans
+
+
+def lift_near_and_away(trace: np.ndarray, obstacles: list[tuple[float, float]]) -> tuple[float, float]:
+    """Mean b (rad) over the steps near a block and over the steps on open ground; NaN where there were none.
+
+    An adaptive gait lifts its feet near blocks and lowers them elsewhere; a fixed gait has the same b in both.
+    """
+    x, b = trace[:, TRACE_COLUMNS.index("distance")], trace[:, TRACE_COLUMNS.index("b")]
+    near = np.zeros(len(x), dtype=bool)
+    for lo, hi in obstacles:
+        near |= (x >= lo - NEAR_BEFORE) & (x <= hi + NEAR_AFTER)
+    return tuple(float(b[mask].mean()) if mask.any() else math.nan for mask in (near, ~near))
 
 
 def _trace_row(info: dict[str, Any]) -> list[float]:
@@ -96,10 +112,12 @@ def run_episode(params: Params, job: EpisodeJob) -> EpisodeResult:
                 if ended:
                     break
         obstacles = _obstacles(env)
+        mass = env.robot_spec.total_mass
     finally:
         env.close()
 
     cpg = np.asarray(trace, dtype=np.float32)
+    b_near, b_open = lift_near_and_away(cpg, obstacles)
     gait = job.controller.gait
     row = {
         "terrain": job.scenario.stem, "controller": job.controller.name, "episode": job.index, "seed": job.seed,
@@ -108,6 +126,9 @@ def run_episode(params: Params, job: EpisodeJob) -> EpisodeResult:
         "distance": float(info["distance"]), "time": float(info["time"]), "steps": len(trace) - 1,
         **{f"{k}_mean": float(cpg[:, i].mean()) for i, k in enumerate(TRACE_COLUMNS) if i >= 2},
         **{f"{k}_max": float(cpg[:, i].max()) for i, k in enumerate(TRACE_COLUMNS) if i >= 2},
+        "b_near_block": b_near, "b_open": b_open,
+        "energy_j": float(info["energy"]),
+        "cost_of_transport": cost_of_transport(float(info["energy"]), mass, float(info["distance"])),
         "wall_s": time.perf_counter() - start,
     }
     return EpisodeResult(job, row, cpg, obstacles)

@@ -25,6 +25,10 @@ def _group_metrics(g: pd.DataFrame) -> dict[str, float | int]:
     }
     if len(goal):  # left out (not NaN) when nothing reached the goal: metrics.json holds numbers only
         out["time_to_goal_mean"] = float(goal.mean())
+        out["cost_of_transport"] = float(g.loc[g["success"], "cost_of_transport"].mean())  # of episodes that arrive
+    for key in ("b_near_block", "b_open"):  # lift near blocks and on open ground (rad); absent where never seen
+        if g[key].notna().any():
+            out[key] = float(g[key].mean())
     return out
 
 

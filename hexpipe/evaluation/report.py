@@ -121,8 +121,8 @@ def _markdown_table(header: Sequence[str], rows: Sequence[Sequence[str]]) -> str
 
 
 def results_table(table: Table, terrains: Sequence[str], controllers: Sequence[str]) -> str:
-    header = ("terrain", "controller", "success", "distance (m)", "time to goal (s)", "fall", "stuck",
-              "mean a / b / omega", "episodes")
+    header = ("terrain", "controller", "success", "distance (m)", "time to goal (s)", "cost of transport", "fall",
+              "stuck", "mean a / b / omega", "b open / near blocks", "episodes")
     rows = []
     for t in terrains:
         for c in controllers:
@@ -131,8 +131,9 @@ def results_table(table: Table, terrains: Sequence[str], controllers: Sequence[s
                 continue
             rows.append((
                 t, c, _fmt(m["success_rate"], ".0%"), f"{m['distance_mean']:.2f} ± {m['distance_std']:.2f}",
-                _fmt(m.get("time_to_goal_mean"), ".1f"), _fmt(m["fall_rate"], ".0%"), _fmt(m["stuck_rate"], ".0%"),
-                f"{m['a_mean']:.2f} / {m['b_mean']:.2f} / {m['omega_mean']:.2f}", str(m["episodes"]),
+                _fmt(m.get("time_to_goal_mean"), ".1f"), _fmt(m.get("cost_of_transport")), _fmt(m["fall_rate"], ".0%"),
+                _fmt(m["stuck_rate"], ".0%"), f"{m['a_mean']:.2f} / {m['b_mean']:.2f} / {m['omega_mean']:.2f}",
+                f"{_fmt(m.get('b_open'))} / {_fmt(m.get('b_near_block'))}", str(m["episodes"]),
             ))
     return _markdown_table(header, rows)
 
@@ -174,7 +175,10 @@ def markdown(table: Table, inputs: ReportInputs) -> str:
         f"Produced by:\n\n```\n{inputs.command}\n```",
         "Every controller runs the same seeded episodes on every terrain (domain randomisation off).\n\n"
         + "\n".join(f"- `{c}`: {inputs.described.get(c, '')}" for c in controllers) + f"\n\n{settings}",
-        "## Results\n\n" + results_table(table, terrains, controllers),
+        "## Results\n\n" + results_table(table, terrains, controllers) + "\n\nCost of transport: E / (m g d) of the "
+        "episodes that reach the goal, E the mechanical work of the 18 joints (sum of |torque x velocity| over time). "
+        "b open / near blocks: the mean lift (rad) on open ground and from 1 m before a block to 0.5 m past it; an "
+        "adaptive gait lifts near blocks only.",
         "## The paper's claims and ours\n\nThe policy \"crosses\" a terrain when at least "
         f"{CROSSES:.0%} of its episodes reach the goal.\n\n" + claims_table(table, terrains),
         f"## Best fixed gait\n\n`best_fixed` = **{inputs.best_gait}** (zero action: the CPG holds it), the best of "
