@@ -211,8 +211,11 @@ class Params(_Section):
 
 def params_hash(params: Params, **stage_excludes: set[str]) -> str:
     """Short hash of the simulation sections (sim, cpg, sensors, task) plus each named stage section minus the
-    given keys: artifacts record it, so that resuming under other params is refused."""
-    parts = {name: getattr(params, name).model_dump(mode="json") for name in ("sim", "cpg", "sensors", "task")}
+    given keys, and of hexpipe's code: artifacts record it, so that resuming under other params or code is refused."""
+    from hexpipe.provenance import code_fingerprint
+
+    parts: dict[str, Any] = {"code": code_fingerprint()}
+    parts |= {name: getattr(params, name).model_dump(mode="json") for name in ("sim", "cpg", "sensors", "task")}
     for name, exclude in stage_excludes.items():
         parts[name] = getattr(params, name).model_dump(mode="json", exclude=exclude)
     return hashlib.sha256(json.dumps(parts, sort_keys=True).encode()).hexdigest()[:16]

@@ -87,6 +87,13 @@ def test_resume_continues_and_changed_params_start_over(tmp_path):
     assert metrics["timesteps"] == 256  # the old checkpoint was made under other params: not resumed
 
 
+def test_checkpoints_from_other_code_are_not_resumed(tmp_path, monkeypatch):
+    train_ppo(tiny(tmp_path, "ppo.blind=true", "ppo.n_envs=1", "ppo.total_timesteps=384"), show_progress=False)
+    monkeypatch.setattr("hexpipe.provenance.code_fingerprint", lambda: "edited-code")
+    metrics = train_ppo(tiny(tmp_path, "ppo.blind=true", "ppo.n_envs=1"), resume=True, show_progress=False)
+    assert metrics["timesteps"] == 256  # the 384-step checkpoint came from other code: started over
+
+
 def test_timesteps_to_success_rate_is_the_first_window_that_reaches_it():
     episodes = [{"success": s, "timesteps": 100 * (i + 1)} for i, s in enumerate([0, 1, 1, 0, 1, 1, 1])]
     assert first_time_success_rate(episodes, threshold=0.6, window=3) == 300

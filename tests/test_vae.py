@@ -365,3 +365,11 @@ def test_changed_settings_start_fresh(tmp_path: Path, monkeypatch: pytest.Monkey
     calls = _count_train_steps(monkeypatch)
     train_vae(_cfg(tmp_path, epochs=1, beta=0.5), synthetic_frames(episodes=4, steps=8))
     assert calls  # a checkpoint from other settings is not resumed
+
+
+def test_a_checkpoint_from_other_code_starts_fresh(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    train_vae(_cfg(tmp_path, epochs=1), synthetic_frames(episodes=4, steps=8))
+    calls = _count_train_steps(monkeypatch)
+    monkeypatch.setattr(stage, "code_fingerprint", lambda: "edited-code")
+    train_vae(_cfg(tmp_path, epochs=1), synthetic_frames(episodes=4, steps=8))
+    assert calls  # same settings and data, but made by other code: not resumed

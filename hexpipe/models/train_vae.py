@@ -42,6 +42,7 @@ from hexpipe.models.vae import (
     preprocess,
     vae_loss,
 )
+from hexpipe.provenance import code_fingerprint
 from hexpipe.recording.reader import Frame, RecordingError, iter_frames
 
 CHECKPOINT = "checkpoint.pt"
@@ -299,11 +300,12 @@ def active_dims(mu: np.ndarray, threshold: float = 0.01) -> int:
 
 
 def _checkpoint_key(cfg: VaeConfig, data: VaeDataset) -> str:
-    """What must match to resume: everything but epochs and output paths, plus the data fingerprint."""
+    """What must match to resume: everything but epochs and output paths, the data and the code fingerprints."""
     settings = cfg.model_dump(exclude={"epochs", "out_dir", "report_dir"})
     return json.dumps(
         {
             "version": CHECKPOINT_VERSION,
+            "code": code_fingerprint(),
             "cfg": settings,
             "channels": DEFAULT_CHANNELS,
             "data": data.fingerprint(),
