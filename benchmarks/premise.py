@@ -17,18 +17,20 @@ from hexpipe.config import TaskConfig
 from hexpipe.envs.hexapod import HexapodEnv
 from hexpipe.envs.rewards import cost_of_transport
 
-CASES = [("flat", 0.15), ("flat", 0.40), ("single_block", 0.15), ("single_block", 0.30), ("single_block", 0.40)]
+# (terrain, a, b) at omega = 1.5 pi: the default stride, then the long stride the policies choose
+CASES = [("flat", 0.25, 0.15), ("flat", 0.25, 0.40), ("single_block", 0.25, 0.15), ("single_block", 0.25, 0.30),
+         ("single_block", 0.25, 0.40), ("flat", 0.40, 0.15), ("flat", 0.40, 0.50)]
 
 
-def episode(terrain: str, b: float, seed: int) -> dict:
-    env = HexapodEnv(terrain, initial_cpg=(0.25, b, 1.5 * math.pi), task=TaskConfig(sensors=()))
+def episode(terrain: str, a: float, b: float, seed: int) -> dict:
+    env = HexapodEnv(terrain, initial_cpg=(a, b, 1.5 * math.pi), task=TaskConfig(sensors=()))
     env.reset(seed=seed)
     while True:
         _, _, terminated, truncated, info = env.step(np.zeros(3))
         if terminated or truncated:
             env.close()
             cot = cost_of_transport(info["energy"], env.robot_spec.total_mass, info["distance"])
-            return {"terrain": terrain, "b": b, "seed": seed, "termination": info["termination"],
+            return {"terrain": terrain, "a": a, "b": b, "seed": seed, "termination": info["termination"],
                     "distance_m": round(info["distance"], 3), "time_s": round(info["time"], 2),
                     "cost_of_transport": round(cot, 2)}
 
@@ -38,9 +40,9 @@ def main() -> None:
     parser.add_argument("--seeds", type=int, default=2)
     parser.add_argument("--out", type=Path, default=Path("reports/premise.json"))
     args = parser.parse_args()
-    rows = [episode(t, b, s) for t, b in CASES for s in range(args.seeds)]
+    rows = [episode(t, a, b, s) for t, a, b in CASES for s in range(args.seeds)]
     for r in rows:
-        print(f"{r['terrain']:13s} b={r['b']:.2f} seed={r['seed']}: {r['termination']} "
+        print(f"{r['terrain']:13s} a={r['a']:.2f} b={r['b']:.2f} seed={r['seed']}: {r['termination']} "
               f"after {r['distance_m']:.2f} m in {r['time_s']:.1f} s, cost of transport {r['cost_of_transport']:.2f}")
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(rows, indent=2) + "\n")

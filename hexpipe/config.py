@@ -177,6 +177,17 @@ class PpoConfig(_Section):
     out_dir: str = "data/models/ppo"
     report_dir: str = "reports/ppo"
 
+    @model_validator(mode="after")
+    def _every_terrain_has_an_env(self) -> PpoConfig:
+        if not self.train_terrains:
+            raise ValueError("train_terrains is empty: name at least one terrain")
+        if len(self.train_terrains) > self.n_envs:  # env i runs train_terrains[i % len]: the rest would be dropped
+            raise ValueError(
+                f"train_terrains has {len(self.train_terrains)} terrains but n_envs={self.n_envs}: each env runs "
+                f"one terrain, so set n_envs >= {len(self.train_terrains)}"
+            )
+        return self
+
 
 class EvalConfig(_Section):
     """Generalisation suite and baselines."""

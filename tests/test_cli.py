@@ -48,6 +48,9 @@ def test_overrides_are_typed_and_nested():
         ("task.sensors=[lidar]", "task.sensors.0"),
         ("nosuchsection.x=1", "unknown key 'nosuchsection'"),
         ("ppo", "expected section.key=value"),
+        ("ppo.train_terrains=[flat, rough, stairs]", "train_terrains has 3 terrains but n_envs=2"),
+        ("ppo.train_terrains=[]", "train_terrains is empty"),
+        ("task.power_cost=-0.1", "task.power_cost"),
     ],
 )
 def test_bad_overrides_name_the_key(override, expected):
