@@ -86,6 +86,7 @@ class EpisodeLog:
             cpg={"a": a, "b": b, "omega": omega, "a_rate": da, "b_rate": db, "omega_rate": domega,
                  "x": xy[:, 0].tolist(), "y": xy[:, 1].tolist()},
             step={"step": env.steps, "time": env.steps * env.control_dt, "reward": float(reward),
+                  "power": float(info.get("power", 0.0)), "energy": float(info.get("energy", 0.0)),
                   "distance": float(info.get("distance", 0.0)), "obstacle_distance": env.obstacle_distance(),
                   "termination": info.get("termination") or "", "terrain": env.terrain.name},
         )
