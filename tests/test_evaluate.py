@@ -23,8 +23,8 @@ from hexpipe.rl.train import train_ppo
 from hexpipe.sim.terrain import TerrainError
 
 ROOT = Path(__file__).resolve().parents[1]
-TINY_PPO = ["ppo.total_timesteps=256", "ppo.n_envs=1", "ppo.n_steps=128", "ppo.batch_size=64", "ppo.n_epochs=1",
-            "task.time_limit=2.0"]
+TINY_PPO = ["ppo.total_timesteps=256", "ppo.n_envs=1", "ppo.train_terrains=[single_block]", "ppo.n_steps=128",
+            "ppo.batch_size=64", "ppo.n_epochs=1", "task.time_limit=2.0"]
 
 
 def trained(root: Path, *extra: str) -> Params:

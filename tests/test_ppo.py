@@ -51,7 +51,7 @@ def test_features_refuse_an_encoder_for_an_unobserved_sensor():
 def tiny(tmp_path: Path, *extra: str) -> Params:
     return load_params(ROOT / "params.yaml", [
         "ppo.total_timesteps=256", "ppo.n_steps=64", "ppo.batch_size=64", "ppo.n_epochs=1",
-        "ppo.checkpoint_every=128", "task.time_limit=2.0",
+        "ppo.checkpoint_every=128", "task.time_limit=2.0", "ppo.train_terrains=[single_block]",
         f"ppo.out_dir={tmp_path / 'ppo'}", f"ppo.report_dir={tmp_path / 'reports'}",
         f"ppo.encoder_dir={tmp_path / 'vae'}", *extra,
     ])
