@@ -6,7 +6,6 @@ This is the only place that reads params.yaml; every command takes `--params PAT
 
 from __future__ import annotations
 
-import json
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -15,6 +14,7 @@ from typing import Annotated
 import typer
 from rich.console import Console
 
+from hexpipe.atomic import write_json
 from hexpipe.config import ConfigError, Params, load_params
 
 app = typer.Typer(
@@ -62,14 +62,6 @@ def _root() -> None:
 def load(params: Path, overrides: list[str] | None) -> Params:
     with user_errors():
         return load_params(params, overrides or [])
-
-
-def write_json(path: Path, data: dict) -> None:
-    """Write JSON atomically (temp name, then rename), so an interrupted run never leaves half a file."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(json.dumps(data, indent=2, sort_keys=True) + "\n")
-    tmp.replace(path)
 
 
 @app.command()
