@@ -10,12 +10,12 @@ params.yaml, e.g. `--sim physics_hz=240 --sim solver_iterations=50 --sim positio
 from __future__ import annotations
 
 import argparse
-import json
 import math
 from pathlib import Path
 
 import numpy as np
 
+from hexpipe.atomic import write_json
 from hexpipe.config import SimConfig, TaskConfig
 from hexpipe.envs.hexapod import HexapodEnv
 from hexpipe.envs.rewards import cost_of_transport
@@ -50,8 +50,7 @@ def main() -> None:
     for r in rows:
         print(f"{r['terrain']:13s} a={r['a']:.2f} b={r['b']:.2f} seed={r['seed']}: {r['termination']} "
               f"after {r['distance_m']:.2f} m in {r['time_s']:.1f} s, cost of transport {r['cost_of_transport']:.2f}")
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(rows, indent=2) + "\n")
+    write_json(args.out, {"sim": sim.model_dump(mode="json"), "episodes": rows})
 
 
 if __name__ == "__main__":
