@@ -1,4 +1,5 @@
-"""Speed benchmarks: env steps per second for physics only, + height map, + camera, per terrain.
+"""Speed benchmarks: env steps per second (default config, the pre-issue-12 physics, physics only, + height map,
++ camera, per terrain) and PPO training steps per second against the bare env rate.
 
 Configurations are interleaved window by window (A B C A B C ...) so that machine noise hits all of them alike,
 and medians are reported. Sensor costs are also timed directly (one sensor read per control step), which is the
@@ -10,18 +11,36 @@ from __future__ import annotations
 import os
 import statistics
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 
 import numpy as np
 
-from hexpipe.config import Params
+from hexpipe.config import Params, SimConfig
 from hexpipe.envs.hexapod import HexapodEnv, quat_to_yaw
 
 SENSOR_SETS = {"physics": (), "heightmap": ("heightmap",), "camera": ("rgb",)}
+# The physics before issue 12: 240 Hz, PyBullet's default solver (50 iterations), the same servo bandwidth
+BASELINE_SIM = {"physics_hz": 240, "solver_iterations": 50, "position_gain": 0.3}
 
 
-def _pin_one_core() -> None:
-    if hasattr(os, "sched_setaffinity"):
-        os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})
+def baseline_sim(sim: SimConfig) -> SimConfig:
+    """`sim` with the pre-issue-12 physics rate, solver and position gain (everything else kept)."""
+    return sim.model_copy(update=BASELINE_SIM)
+
+
+@contextmanager
+def _one_core() -> Iterator[None]:
+    """Run on one core (the env is single-threaded; this keeps its timing apart from the scheduler), then restore."""
+    if not hasattr(os, "sched_setaffinity"):
+        yield
+        return
+    cores = os.sched_getaffinity(0)
+    os.sched_setaffinity(0, {min(cores)})
+    try:
+        yield
+    finally:
+        os.sched_setaffinity(0, cores)
 
 
 def _window(env: HexapodEnv, steps: int) -> float:
@@ -35,16 +54,27 @@ def _window(env: HexapodEnv, steps: int) -> float:
 
 
 def bench_env(params: Params, terrains: tuple[str, ...], windows: int = 7, steps: int = 60) -> dict:
-    """Env step rate (steps/s, one core) for each terrain and sensor set, plus direct sensor read costs."""
-    _pin_one_core()
-    results: dict = {"windows": windows, "steps_per_window": steps, "control_hz": params.sim.control_hz}
+    """Env step rate (steps/s, one core) for each terrain and sensor set, plus direct sensor read costs.
+
+    `default` is the env as configured (its own sensors); `baseline` the same env with the pre-issue-12 physics
+    (`BASELINE_SIM`), so `speedup_vs_baseline` is what the physics settings buy, measured in the same windows.
+    """
+    with _one_core():
+        return _bench_env(params, terrains, windows, steps)
+
+
+def _bench_env(params: Params, terrains: tuple[str, ...], windows: int, steps: int) -> dict:
+    results: dict = {"windows": windows, "steps_per_window": steps, "control_hz": params.sim.control_hz,
+                     "sim": params.sim.model_dump(mode="json"), "baseline_sim": BASELINE_SIM}
     for terrain in terrains:
+        sims = dict.fromkeys(SENSOR_SETS, params.sim) | {"default": params.sim, "baseline": baseline_sim(params.sim)}
+        sensor_sets = SENSOR_SETS | {"default": params.task.sensors, "baseline": params.task.sensors}
         envs = {
             name: HexapodEnv(
-                terrain, sim=params.sim, cpg=params.cpg, sensors=params.sensors,
+                terrain, sim=sims[name], cpg=params.cpg, sensors=params.sensors,
                 task=params.task.model_copy(update={"sensors": sensors}),
             )
-            for name, sensors in SENSOR_SETS.items()
+            for name, sensors in sensor_sets.items()
         }
         for env in envs.values():
             env.reset(seed=0)
@@ -56,6 +86,7 @@ def bench_env(params: Params, terrains: tuple[str, ...], windows: int = 7, steps
         row = {name: {"ms_per_step": 1e3 * statistics.median(t), "steps_per_s": 1 / statistics.median(t)}
                for name, t in times.items()}
         physics = statistics.median(times["physics"])
+        row["speedup_vs_baseline"] = statistics.median(times["baseline"]) / statistics.median(times["default"])
         for name in ("heightmap", "camera"):
             row[name]["overhead_vs_physics"] = statistics.median(times[name]) / physics - 1
 
@@ -85,3 +116,44 @@ def _median_call(fn, repeats: int = 300) -> float:
         fn()
         samples.append(time.perf_counter() - start)
     return statistics.median(samples)
+
+
+def bench_training(params: Params, steps: int = 3072, terrain: str | None = None) -> dict:
+    """PPO training steps/s with `ppo.n_envs` worker envs against the bare vectorised env rate in the same run.
+
+    The policy sees what `train-ppo` gives it (an encoder of the configured VAE shape, untrained: its weights do
+    not change its cost). `bare_env_steps_per_s` is timed inside the run (rl.train.EnvClock), so both numbers
+    share the machine's load. Budget: `steps` timesteps, a few PPO rollouts and updates.
+    """
+    import torch
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    from hexpipe.models.vae import ConvVAE, FrozenEncoder, encoder_config
+    from hexpipe.rl.train import EnvClock, make_vec_env, wrap_features
+
+    cfg, vae = params.ppo, params.vae
+    torch.set_num_threads(1)
+    encoder = None
+    if not cfg.blind:
+        shape = ((params.sensors.heightmap_rows, params.sensors.heightmap_cols) if vae.modality == "heightmap"
+                 else (params.sensors.camera_height, params.sensors.camera_width, 3))
+        model = ConvVAE(1 if vae.modality == "heightmap" else 3, vae.image_size, vae.latent_dim)
+        encoder = FrozenEncoder(model.encoder, encoder_config(model, vae.modality, shape))
+    sensors = () if encoder is None else (encoder.modality,)
+    terrains = (terrain,) if terrain else cfg.train_terrains
+    clock = EnvClock(make_vec_env(params, terrains, cfg.n_envs, sensors, cfg.randomize, cfg.seed))
+    venv = VecNormalize(wrap_features(clock, encoder, params), norm_obs=True, norm_reward=True, gamma=cfg.gamma)
+    agent = PPO(
+        "MlpPolicy", venv, n_steps=cfg.n_steps, batch_size=cfg.batch_size, n_epochs=cfg.n_epochs,
+        learning_rate=cfg.learning_rate, gamma=cfg.gamma, gae_lambda=cfg.gae_lambda, clip_range=cfg.clip_range,
+        policy_kwargs={"net_arch": list(cfg.net_arch)}, seed=cfg.seed, device="cpu", verbose=0,
+    )
+    start = time.perf_counter()
+    agent.learn(steps)
+    seconds = time.perf_counter() - start
+    venv.close()
+    train = agent.num_timesteps / seconds
+    return {"n_envs": cfg.n_envs, "timesteps": agent.num_timesteps, "seconds": seconds, "terrains": list(terrains),
+            "encoder": encoder is not None, "train_steps_per_s": train,
+            "bare_env_steps_per_s": clock.steps_per_s, "train_vs_bare": train / clock.steps_per_s}

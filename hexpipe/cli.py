@@ -164,24 +164,38 @@ def bench(
     terrains: Annotated[str, typer.Option(help="comma-separated terrains")] = "single_block,rough",
     windows: Annotated[int, typer.Option(min=1)] = 7,
     steps: Annotated[int, typer.Option(min=1, help="env steps per timed window")] = 60,
+    train_steps: Annotated[int, typer.Option(min=0, help="PPO timesteps for the training rate (0: skip)")] = 3072,
     out: Annotated[Path, typer.Option(help="JSON report")] = Path("reports/bench/env.json"),
 ) -> None:
-    """Env steps per second on one core: physics only, + height map, + camera; writes a JSON report."""
-    from hexpipe.bench import bench_env
+    """Env steps/s on one core (default config vs the pre-issue-12 physics; physics only, + height map, + camera)
+    and PPO training steps/s against the bare env rate; writes a JSON report."""
+    from hexpipe.bench import bench_env, bench_training
 
     cfg = load(params, set_)
     with user_errors():
         result = bench_env(cfg, tuple(t for t in terrains.split(",") if t), windows=windows, steps=steps)
+        if train_steps:
+            result["training"] = bench_training(cfg, train_steps)
     write_json(out, result)
     for terrain, row in result.items():
-        if not isinstance(row, dict):
+        if not isinstance(row, dict) or "physics" not in row:
             continue
+        console.print(
+            f"{terrain:13s} default config {row['default']['steps_per_s']:6.0f} steps/s | baseline physics "
+            f"{row['baseline']['steps_per_s']:6.0f} | speedup {row['speedup_vs_baseline']:.2f}x"
+        )
         console.print(
             f"{terrain:13s} physics {row['physics']['steps_per_s']:6.0f} steps/s | "
             f"+heightmap {row['heightmap']['steps_per_s']:6.0f} "
             f"({100 * row['heightmap']['overhead_vs_physics']:+.1f}%, "
             f"read {row['heightmap_read_ms']:.3f} ms = {100 * row['heightmap_read_vs_physics_step']:.1f}% of a step) | "
             f"+camera {row['camera']['steps_per_s']:6.0f} (read {row['camera_read_ms']:.2f} ms)"
+        )
+    if "training" in result:
+        t = result["training"]
+        console.print(
+            f"PPO, {t['n_envs']} envs: {t['train_steps_per_s']:.0f} steps/s, {t['train_vs_bare']:.0%} of the bare "
+            f"env's {t['bare_env_steps_per_s']:.0f} steps/s in the same run"
         )
     console.print(f"wrote {out}")
 

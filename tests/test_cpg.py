@@ -6,8 +6,17 @@ import numpy as np
 import pytest
 
 from hexpipe.config import CpgConfig
-from hexpipe.sim.cpg import CPG, coupling_matrix, integrate_parameters, step_oscillators, tripod_phases
-from hexpipe.sim.gait import GaitMap, leg_ik
+from hexpipe.sim.cpg import (
+    CPG,
+    coupling_flows,
+    coupling_matrix,
+    integrate_parameters,
+    locked_states,
+    parameter_path,
+    radial_flow,
+    tripod_phases,
+)
+from hexpipe.sim.gait import GaitMap, leg_ik, slew_limit, slew_path
 from hexpipe.sim.robot import RobotSpec
 
 TRIPODS = np.array([leg.tripod for leg in RobotSpec().legs])
@@ -60,10 +69,57 @@ def test_tripods_lock_from_random_phases():
 
 def test_locked_coupling_does_not_change_the_cycle():
     phases = tripod_phases(TRIPODS)
-    z = np.stack([np.cos(phases), np.sin(phases)], 1)
-    with_coupling = step_oscillators(z, 3.0, DT, 10.0, coupling_matrix(phases, 4.0))
-    without = step_oscillators(z, 3.0, DT, 10.0, coupling_matrix(phases, 0.0))
-    assert np.allclose(with_coupling, without, atol=1e-12)
+    coupling = coupling_matrix(phases, 4.0)
+    assert np.allclose(coupling @ locked_states(phases, 0.7), 0.0, atol=1e-12)
+    flows = coupling_flows(coupling, DT, 12)
+    assert np.allclose(flows @ locked_states(phases, 0.7), locked_states(phases, 0.7), atol=1e-12)
+    # off lock, the coupling pulls the tripods together: the anti-locked mode decays
+    assert np.abs(flows[-1] @ np.ones(6)).max() < np.abs(np.ones(6)).max()
+
+
+def test_radial_flow_is_the_exact_logistic_solution():
+    w = np.array([0.1 + 0.2j, 2.0 - 1.0j, 1.0 + 0.0j, 0.0j])
+    t = np.array([1e-3, 0.05, 1.0])
+    out = radial_flow(w, 10.0, t)
+    assert np.allclose(np.angle(out[:, :3]), np.angle(w[:3]))  # the phase is kept
+    assert np.allclose(np.abs(out[:, 2]), 1.0) and np.allclose(out[:, 3], 0.0)  # fixed points
+    # against many tiny Euler steps of dw/dt = gamma (1 - |w|^2) w
+    euler = w.copy()
+    for _ in range(50_000):
+        euler = euler + 1e-6 * 10.0 * (1 - np.abs(euler) ** 2) * euler
+    assert np.allclose(out[1], euler, atol=1e-4)
+
+
+def test_advance_plans_a_control_step_like_single_steps():
+    cfg = CpgConfig()
+    one, many = CPG(cfg, TRIPODS), CPG(cfg, TRIPODS)
+    accel = np.array([4.0, -4.0, 40.0])
+    singles = np.array([one.step(accel, DT) for _ in range(12)])
+    planned = many.advance(accel, DT, 12)
+    assert planned.shape == (12, 6, 2)
+    assert np.allclose(planned, singles, atol=1e-9)  # locked: both are the exact rotation
+    assert np.array_equal(one.params, many.params) and np.array_equal(one.rates, many.rates)
+
+
+def test_parameter_path_equals_repeated_integration():
+    cfg = CpgConfig()
+    rng = np.random.default_rng(2)
+    values, rates = np.asarray(cfg.initial), np.zeros(3)
+    for _ in range(300):  # random accelerations drive the values into their bounds and back
+        accel = rng.uniform(-1, 1, 3) * np.asarray(cfg.accel_limit)
+        path_v, path_r = parameter_path(values, rates, accel, DT, 12, cfg)
+        for k in range(12):
+            values, rates = integrate_parameters(values, rates, accel, DT, cfg)
+            assert np.array_equal(path_v[k], values) and np.array_equal(path_r[k], rates)
+
+
+def test_slew_path_equals_repeated_slew_limit():
+    rng = np.random.default_rng(3)
+    previous, targets, max_step = rng.normal(size=18), rng.normal(size=(12, 18)), np.full(18, 0.05)
+    path = slew_path(previous, targets, max_step)
+    for k in range(12):
+        previous = slew_limit(previous, targets[k], max_step)
+        assert np.array_equal(path[k], previous)
 
 
 def test_joint_targets_continuous_when_parameters_change_mid_stride():
@@ -100,6 +156,9 @@ def test_swing_lifts_and_stance_holds_the_ik_angles():
     assert np.allclose(t[:, 2], gait.stance_elbow)
     # left legs (sin > 0) yaw with +x, right legs with -x: both sweep the foot backward for increasing x
     assert t[0, 0] == pytest.approx(0.1) and t[1, 0] == pytest.approx(-0.1)
+    # a whole control step maps at once, substep by substep
+    steps = np.stack([xy, -xy, 0.5 * xy])
+    assert np.array_equal(gait.joint_targets(steps), np.stack([gait.joint_targets(x) for x in steps]))
 
 
 def test_leg_ik_reaches_target_and_rejects_unreachable():

@@ -28,7 +28,7 @@ from gymnasium import spaces
 from hexpipe.config import CpgConfig, SensorConfig, SimConfig, TaskConfig
 from hexpipe.envs.rewards import forward_velocity_reward, power_penalty
 from hexpipe.sim.cpg import CPG
-from hexpipe.sim.gait import GaitMap, slew_limit
+from hexpipe.sim.gait import GaitMap, slew_path
 from hexpipe.sim.robot import Robot, RobotSpec
 from hexpipe.sim.sensors import Camera, HeightMapSensor
 from hexpipe.sim.terrain import Terrain, TerrainRecipe, load_terrain, realize
@@ -123,7 +123,9 @@ class HexapodEnv(gym.Env):
         p, c = self._p, self.client
         p.resetSimulation(physicsClientId=c)
         p.setGravity(0, 0, -9.81, physicsClientId=c)
-        p.setPhysicsEngineParameter(fixedTimeStep=self.physics_dt, physicsClientId=c)
+        p.setPhysicsEngineParameter(
+            fixedTimeStep=self.physics_dt, numSolverIterations=self.sim_cfg.solver_iterations, physicsClientId=c
+        )
         self.terrain = realize(self.recipe, self.np_random)
         self.terrain_bodies = self.terrain.build(c)
 
@@ -164,13 +166,16 @@ class HexapodEnv(gym.Env):
         accel = np.clip(np.asarray(action, dtype=float), -1.0, 1.0) * self._accel_limit
         p, c = self._p, self.client
         gains = (self.sim_cfg.position_gain, self.sim_cfg.velocity_gain)
+        # The CPG is open loop: plan the whole control step's joint targets at once, then run the physics
+        xy = self.cpg.advance(accel, self.physics_dt, self.substeps)
+        targets = slew_path(self._targets, self.gait.joint_targets(xy), self._max_joint_step)
+        self._targets = targets[-1]
         power = 0.0
-        for _ in range(self.substeps):
-            xy = self.cpg.step(accel, self.physics_dt)
-            self._targets = slew_limit(self._targets, self.gait.joint_targets(xy), self._max_joint_step)
-            self.robot.command(self._targets, *gains)
+        for target in targets:
+            self.robot.command(target, *gains)
             p.stepSimulation(physicsClientId=c)
-            power += self.robot.mechanical_power() / self.substeps
+            power += self.robot.mechanical_power()
+        power /= self.substeps
         self.steps += 1
 
         pos, quat, lin, _ = self.robot.base_state()

@@ -41,6 +41,15 @@ def slew_limit(previous: np.ndarray, target: np.ndarray, max_step: np.ndarray) -
     return previous + np.minimum(np.maximum(target - previous, -max_step), max_step)
 
 
+def slew_path(previous: np.ndarray, targets: np.ndarray, max_step: np.ndarray) -> np.ndarray:
+    """`slew_limit` along a sequence: targets (n, joints) -> the (n, joints) limited targets, one per substep."""
+    out = np.empty_like(targets)
+    current = previous
+    for k, target in enumerate(targets):
+        current = out[k] = slew_limit(current, target, max_step)
+    return out
+
+
 class GaitMap:
     """Maps the six (x, y) oscillator outputs of one time step to 18 joint targets (rad)."""
 
@@ -53,9 +62,13 @@ class GaitMap:
         self.yaw_sign = np.array([math.copysign(1.0, math.sin(leg.angle)) for leg in spec.legs])
 
     def joint_targets(self, xy: np.ndarray) -> np.ndarray:
-        """xy: (6, 2) oscillator outputs (rad) -> (18,) targets ordered yaw, shoulder, elbow per leg."""
-        targets = np.empty((len(xy), 3))
-        targets[:, 0] = self.yaw_sign * xy[:, 0]
-        targets[:, 1] = self.stance_shoulder + self.lift_gain * np.maximum(xy[:, 1], 0.0)
-        targets[:, 2] = self.stance_elbow
-        return targets.reshape(-1)
+        """xy: (..., 6, 2) oscillator outputs (rad) -> (..., 18) targets ordered yaw, shoulder, elbow per leg.
+
+        Leading axes (e.g. the physics substeps of one control step) are kept, so a whole step maps at once.
+        """
+        xy = np.asarray(xy)
+        targets = np.empty((*xy.shape[:-1], 3))
+        targets[..., 0] = self.yaw_sign * xy[..., 0]
+        targets[..., 1] = self.stance_shoulder + self.lift_gain * np.maximum(xy[..., 1], 0.0)
+        targets[..., 2] = self.stance_elbow
+        return targets.reshape(*xy.shape[:-2], -1)
