@@ -119,6 +119,9 @@ class TaskConfig(_Section):
     fall_tilt: Annotated[float, Field(gt=0, le=math.pi)] = 1.0  # |roll| or |pitch| beyond this is a fall (rad)
     reward_scale: PositiveFloat = 100.0  # reward = reward_scale * forward velocity (m/s), as in the paper
     power_cost: Annotated[float, Field(ge=0)] = 0.0  # minus this much reward per W of joint power; 0 = the paper
+    # the observation's `body` starts with x, y relative to the start (the paper's state); false drops them, so the
+    # policy must find the block with its terrain sensor instead of memorising where it was (body: 13 -> 11 numbers)
+    observe_position: bool = True
     randomization: RandomizationConfig = RandomizationConfig()
 
 

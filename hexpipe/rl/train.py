@@ -99,6 +99,7 @@ def policy_config(params: Params, encoder, observation_dim: int) -> dict[str, An
         "cpg": params.cpg.model_dump(mode="json"),
         "train_terrains": list(params.ppo.train_terrains),
         "randomize": params.ppo.randomize,
+        "observe_position": params.task.observe_position,
     }
 
 
