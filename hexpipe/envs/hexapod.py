@@ -126,7 +126,8 @@ class HexapodEnv(gym.Env):
         p.resetSimulation(physicsClientId=c)
         p.setGravity(0, 0, -9.81, physicsClientId=c)
         p.setPhysicsEngineParameter(fixedTimeStep=self.physics_dt, physicsClientId=c)
-        self.terrain = realize(self.recipe, self.np_random)
+        # options={"difficulty": d} (a curriculum's level, in [0, 1]) overrides a `varied` terrain's own difficulty
+        self.terrain = realize(self.recipe, self.np_random, (options or {}).get("difficulty"))
         self.terrain_bodies = self.terrain.build(c)
 
         friction = self.terrain.friction or self.sim_cfg.friction
