@@ -175,6 +175,9 @@ class PpoConfig(_Section):
     # makes the policy cross the wide block (set train_terrains: [single_block], randomize: false for the paper)
     train_terrains: tuple[str, ...] = ("single_block", "random_blocks")
     randomize: bool = True  # draw friction and base mass from task.randomization at every reset
+    # legged_gym's terrain curriculum: each env starts at difficulty 0 and is promoted when it completes its course,
+    # demoted when it walks less than half of it (hexpipe/rl/curriculum.py); only `varied` terrains use the level
+    curriculum: bool = False
     checkpoint_every: PositiveInt = 20_000
     encoder_dir: str = "data/models/vae"
     out_dir: str = "data/models/ppo"
