@@ -129,7 +129,8 @@ class CollectConfig(_Section):
     """Random-policy rollouts logged to MCAP."""
 
     episodes: PositiveInt = 28  # about 2.6k frames, the paper's dataset size
-    terrains: dict[str, PositiveFloat] = {"single_block": 1.0, "random_blocks": 1.0, "flat": 0.25}
+    # weights; `varied` covers the training distribution the VAE's probes are measured on
+    terrains: dict[str, PositiveFloat] = {"single_block": 1.0, "random_blocks": 0.5, "varied": 2.0, "flat": 0.25}
     log_every: PositiveInt = 3  # log every k-th control step; at 3, logging (camera renders included) costs < 20%
     max_seconds: PositiveFloat = 25.0  # per-episode cap (s of sim time)
     workers: PositiveInt = 2

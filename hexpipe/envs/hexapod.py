@@ -271,6 +271,13 @@ class HexapodEnv(gym.Env):
         pos, quat, _, _ = self.robot.base_state()
         return float(self.terrain.obstacle_distance(float(pos[0]), float(pos[1]), quat_to_yaw(quat)))
 
+    def rise_ahead(self) -> tuple[float, float]:
+        """(distance, height) in m of the next rise ahead within the height map's far edge; (inf, nan) if none.
+        Labels for the VAE's probes (see `Terrain.rise_ahead`)."""
+        pos, quat, _, _ = self.robot.base_state()
+        reach = self.sensor_cfg.heightmap_ahead[1]
+        return self.terrain.rise_ahead(float(pos[0]), float(pos[1]), quat_to_yaw(quat), max_range=reach)
+
     def render(self) -> np.ndarray | None:
         if self.render_mode != "rgb_array" or self.robot is None:
             return None
