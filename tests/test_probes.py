@@ -124,8 +124,17 @@ def test_logged_steps_carry_the_rise_labels(tmp_path: Path) -> None:
             _, reward, *_, info = env.step(np.zeros(3))
             log.step(reward, info)
     x = float(env.robot.base_state()[0][0])
+    far = HexapodEnv("single_block", task=TaskConfig(sensors=()))
+    far.reset(seed=0)
+    p = far._p  # put the robot 1.6 m before the face: beyond the height map's 1.4 m reach, within 3 m
+    p.resetBasePositionAndOrientation(far.robot.body, [-0.6, 0.0, 0.3], [0, 0, 0, 1], physicsClientId=far.client)
+    labels = far.terrain_labels()
+    assert labels["obstacle_distance"] == pytest.approx(1.6, abs=2e-3)
+    assert math.isinf(labels["rise_distance"]) and math.isnan(labels["rise_height"])
+    far.close()
     env.close()
     frames = list(iter_frames(tmp_path / "ep.mcap", ("heightmap",)))
     assert len(frames) == 4
     assert frames[-1].meta["rise_distance"] == pytest.approx(1.0 - x, abs=2e-3)
+    assert all(f.meta["obstacle_distance"] == f.meta["rise_distance"] for f in frames)  # within reach: the same
     assert all(f.meta["rise_height"] == pytest.approx(0.1) for f in frames)

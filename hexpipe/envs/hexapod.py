@@ -271,12 +271,18 @@ class HexapodEnv(gym.Env):
         pos, quat, _, _ = self.robot.base_state()
         return float(self.terrain.obstacle_distance(float(pos[0]), float(pos[1]), quat_to_yaw(quat)))
 
-    def rise_ahead(self) -> tuple[float, float]:
-        """(distance, height) in m of the next rise ahead within the height map's far edge; (inf, nan) if none.
-        Labels for the VAE's probes (see `Terrain.rise_ahead`)."""
+    def terrain_labels(self) -> dict[str, float]:
+        """Labels for the VAE's probes, from one scan of the terrain ahead (`Terrain.rise_ahead`, 3 m): the
+        `obstacle_distance` (m, inf if none within 3 m) and the next rise within the height map's far edge,
+        `rise_distance` (m, inf if none) and `rise_height` (m, nan if none)."""
         pos, quat, _, _ = self.robot.base_state()
-        reach = self.sensor_cfg.heightmap_ahead[1]
-        return self.terrain.rise_ahead(float(pos[0]), float(pos[1]), quat_to_yaw(quat), max_range=reach)
+        distance, height = self.terrain.rise_ahead(float(pos[0]), float(pos[1]), quat_to_yaw(quat), max_range=3.0)
+        in_reach = distance <= self.sensor_cfg.heightmap_ahead[1]
+        return {
+            "obstacle_distance": distance,
+            "rise_distance": distance if in_reach else math.inf,
+            "rise_height": height if in_reach else math.nan,
+        }
 
     def render(self) -> np.ndarray | None:
         if self.render_mode != "rgb_array" or self.robot is None:

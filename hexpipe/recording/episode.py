@@ -73,7 +73,6 @@ class EpisodeLog:
         sensed = env.sense(self.sensors, base=(base_pos, base_quat))
         q, dq, tau = env.robot.joint_states()
         xy = env.cpg.xy
-        rise_distance, rise_height = env.rise_ahead()  # VAE probe labels; null when nothing rises in range
         a, b, omega = env.cpg.params
         da, db, domega = env.cpg.rates
         self.writer.log_step(
@@ -88,8 +87,7 @@ class EpisodeLog:
                  "x": xy[:, 0].tolist(), "y": xy[:, 1].tolist()},
             step={"step": env.steps, "time": env.steps * env.control_dt, "reward": float(reward),
                   "power": float(info.get("power", 0.0)), "energy": float(info.get("energy", 0.0)),
-                  "distance": float(info.get("distance", 0.0)), "obstacle_distance": env.obstacle_distance(),
-                  "rise_distance": rise_distance, "rise_height": rise_height,
+                  "distance": float(info.get("distance", 0.0)), **env.terrain_labels(),  # null: nothing ahead
                   "termination": info.get("termination") or "", "terrain": env.terrain.name},
         )
         self.frames += 1
