@@ -125,6 +125,9 @@ class TaskConfig(_Section):
     fall_tilt: Annotated[float, Field(gt=0, le=math.pi)] = 1.0  # |roll| or |pitch| beyond this is a fall (rad)
     reward_scale: PositiveFloat = 100.0  # reward = reward_scale * forward velocity (m/s), as in the paper
     power_cost: Annotated[float, Field(ge=0)] = 0.0  # minus this much reward per W of joint power; 0 = the paper
+    # the observation's `body` starts with x, y relative to the start (the paper's state); false drops them, so the
+    # policy must find the block with its terrain sensor instead of memorising where it was (body: 13 -> 11 numbers)
+    observe_position: bool = True
     randomization: RandomizationConfig = RandomizationConfig()
 
 
@@ -132,7 +135,8 @@ class CollectConfig(_Section):
     """Random-policy rollouts logged to MCAP."""
 
     episodes: PositiveInt = 28  # about 2.6k frames, the paper's dataset size
-    terrains: dict[str, PositiveFloat] = {"single_block": 1.0, "random_blocks": 1.0, "flat": 0.25}
+    # weights; `varied` covers the training distribution the VAE's probes are measured on
+    terrains: dict[str, PositiveFloat] = {"single_block": 1.0, "random_blocks": 0.5, "varied": 2.0, "flat": 0.25}
     log_every: PositiveInt = 3  # log every k-th control step; at 3, logging (camera renders included) costs < 20%
     max_seconds: PositiveFloat = 25.0  # per-episode cap (s of sim time)
     workers: PositiveInt = 2
@@ -178,6 +182,9 @@ class PpoConfig(_Section):
     # makes the policy cross the wide block (set train_terrains: [single_block], randomize: false for the paper)
     train_terrains: tuple[str, ...] = ("single_block", "random_blocks")
     randomize: bool = True  # draw friction and base mass from task.randomization at every reset
+    # legged_gym's terrain curriculum: each env starts at difficulty 0 and is promoted when it completes its course,
+    # demoted when it walks less than half of it (hexpipe/rl/curriculum.py); only `varied` terrains use the level
+    curriculum: bool = False
     checkpoint_every: PositiveInt = 20_000
     encoder_dir: str = "data/models/vae"
     out_dir: str = "data/models/ppo"

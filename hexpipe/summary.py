@@ -61,6 +61,7 @@ def build_summary(params: Params, collect_report: Path, root: Path) -> str:
     else:
         flat = {**{f"val/{k}": v for k, v in vae.get("val", {}).items()},
                 **{k: vae[k] for k in VAE_HEADLINES if k in vae},
+                **{f"probe/{k}": v for k, v in vae.get("probe", {}).items()},  # rise distance / height R²
                 "train/images_per_s": vae.get("train", {}).get("images_per_s")}
         vae_cfg = params.vae
         lines += [f"Modality: `{vae_cfg.modality}`, latent size {vae_cfg.latent_dim}, beta {vae_cfg.beta}.", "",
@@ -69,6 +70,8 @@ def build_summary(params: Params, collect_report: Path, root: Path) -> str:
         images = vae_dir / "plots" / "images"
         lines += ["", _image(images / "recon_grid.png", root, "inputs and reconstructions"), "",
                   _image(images / "latent_map.png", root, "latent map"), ""]
+        if (images / "rise_probes.png").is_file():
+            lines += [_image(images / "rise_probes.png", root, "rise probes"), ""]
 
     lines += ["## 3. train-ppo: learning the gait", ""]
     ppo = _read(ppo_dir / "metrics.json")

@@ -2,7 +2,9 @@
 
 Observation (Dict):
 - `body` (13): position relative to the start (x, y; z = base height above the terrain below), orientation
-  quaternion (xyzw), linear velocity (m/s) and angular velocity (rad/s), world frame;
+  quaternion (xyzw), linear velocity (m/s) and angular velocity (rad/s), world frame; 11 without x, y when
+  `TaskConfig.observe_position` is false (the same course shifted along x then looks the same at the same
+  distance from its block);
 - `cpg` (6): a, b, omega and their rates;
 - `heightmap` (rows * cols,) float32 m, row-major (reshape with `env.heightmap.shape`; flat because SB3 expects
   1-D vectors or images), and/or `rgb` (H, W, 3) uint8, as selected by `TaskConfig.sensors`.
@@ -105,7 +107,7 @@ class HexapodEnv(gym.Env):
         lo, hi = np.asarray(self.cpg_cfg.lower), np.asarray(self.cpg_cfg.upper)
         rate = np.asarray(self.cpg_cfg.rate_limit)
         obs: dict[str, spaces.Space] = {
-            "body": spaces.Box(-100.0, 100.0, shape=(13,), dtype=np.float32),
+            "body": spaces.Box(-100.0, 100.0, shape=(13 if self.task.observe_position else 11,), dtype=np.float32),
             "cpg": spaces.Box(
                 np.concatenate([lo, -rate]).astype(np.float32), np.concatenate([hi, rate]).astype(np.float32)
             ),
@@ -126,7 +128,8 @@ class HexapodEnv(gym.Env):
         p.setPhysicsEngineParameter(
             fixedTimeStep=self.physics_dt, numSolverIterations=self.sim_cfg.solver_iterations, physicsClientId=c
         )
-        self.terrain = realize(self.recipe, self.np_random)
+        # options={"difficulty": d} (a curriculum's level, in [0, 1]) overrides a `varied` terrain's own difficulty
+        self.terrain = realize(self.recipe, self.np_random, (options or {}).get("difficulty"))
         self.terrain_bodies = self.terrain.build(c)
 
         friction = self.terrain.friction or self.sim_cfg.friction
@@ -220,6 +223,8 @@ class HexapodEnv(gym.Env):
         pos, quat, lin, ang = self.robot.base_state()
         below = float(self.terrain.height_at(pos[:1], pos[1:2])[0])
         body = np.concatenate([[pos[0] - self.start_xy[0], pos[1] - self.start_xy[1], pos[2] - below], quat, lin, ang])
+        if not self.task.observe_position:
+            body = body[2:]  # no x, y: height above the terrain, orientation and velocities only
         obs = {
             "body": np.clip(body, -100, 100).astype(np.float32),
             "cpg": np.concatenate([self.cpg.params, self.cpg.rates]).astype(np.float32),
@@ -270,6 +275,19 @@ class HexapodEnv(gym.Env):
     def obstacle_distance(self) -> float:
         pos, quat, _, _ = self.robot.base_state()
         return float(self.terrain.obstacle_distance(float(pos[0]), float(pos[1]), quat_to_yaw(quat)))
+
+    def terrain_labels(self) -> dict[str, float]:
+        """Labels for the VAE's probes, from one scan of the terrain ahead (`Terrain.rise_ahead`, 3 m): the
+        `obstacle_distance` (m, inf if none within 3 m) and the next rise within the height map's far edge,
+        `rise_distance` (m, inf if none) and `rise_height` (m, nan if none)."""
+        pos, quat, _, _ = self.robot.base_state()
+        distance, height = self.terrain.rise_ahead(float(pos[0]), float(pos[1]), quat_to_yaw(quat), max_range=3.0)
+        in_reach = distance <= self.sensor_cfg.heightmap_ahead[1]
+        return {
+            "obstacle_distance": distance,
+            "rise_distance": distance if in_reach else math.inf,
+            "rise_height": height if in_reach else math.nan,
+        }
 
     def render(self) -> np.ndarray | None:
         if self.render_mode != "rgb_array" or self.robot is None:

@@ -3,7 +3,8 @@
 Frames are streamed once into compact arrays (the `preprocess` output, stored as uint8 for rgb and float16 for
 height maps), split into train/validation by episode so no rollout leaks across the split, and trained with a
 seeded, resumable loop. Reports go to dvclive under `report_dir`: per-epoch loss curves, final metrics, a
-reconstruction grid, a 2-D PCA map of the latents and a linear probe for "block within 1 m ahead".
+reconstruction grid, a 2-D PCA map of the latents, a linear probe for "block within 1 m ahead", and ridge-regression
+probes from the latent to what the gait needs: the distance to the next rise ahead and that rise's height.
 """
 
 from __future__ import annotations
@@ -80,6 +81,17 @@ class VaeDataset:
     episodes: list[str]  # episode names (MCAP stems), sorted
     obstacle_distance: np.ndarray  # (N,) float32 m to the next raised terrain ahead; inf if none
     input_shape: tuple[int, ...]  # one raw frame as logged: (H, W, 3) or (R, C)
+    # the next rise within the height map's reach (Terrain.rise_ahead): m ahead (inf: none in range) and m high
+    # (nan: none); both nan on frames logged before these labels existed
+    rise_distance: np.ndarray | None = None  # (N,) float32
+    rise_height: np.ndarray | None = None  # (N,) float32
+
+    def __post_init__(self) -> None:
+        unlabelled = np.full(len(self.images), np.nan, dtype=np.float32)
+        if self.rise_distance is None:
+            self.rise_distance = unlabelled
+        if self.rise_height is None:
+            self.rise_height = unlabelled.copy()
 
     def __len__(self) -> int:
         return len(self.images)
@@ -112,6 +124,7 @@ def build_dataset(frames: Iterable[Frame], modality: str, image_size: int, sourc
     pending: list[np.ndarray] = []
     episode_names: list[str] = []
     distances: list[float] = []
+    rises: list[tuple[float, float]] = []
     present: set[str] = set()
     input_shape: tuple[int, ...] | None = None
     n_frames = 0
@@ -139,6 +152,7 @@ def build_dataset(frames: Iterable[Frame], modality: str, image_size: int, sourc
         episode_names.append(frame.episode)
         distance = frame.meta.get("obstacle_distance")
         distances.append(math.inf if distance is None else float(distance))
+        rises.append(_rise_labels(frame.meta))
         if len(pending) >= _CHUNK:
             flush()
     flush()
@@ -161,7 +175,20 @@ def build_dataset(frames: Iterable[Frame], modality: str, image_size: int, sourc
         episodes=episodes,
         obstacle_distance=np.array(distances, dtype=np.float32),
         input_shape=tuple(int(s) for s in input_shape),
+        rise_distance=np.array([d for d, _ in rises], dtype=np.float32),
+        rise_height=np.array([h for _, h in rises], dtype=np.float32),
     )
+
+
+def _rise_labels(meta: dict[str, Any]) -> tuple[float, float]:
+    """(distance, height) of the next rise from a /step message: null is 'no rise in range' (inf, nan); a missing
+    key is an older recording without the labels (nan, nan)."""
+    if "rise_distance" not in meta:
+        return math.nan, math.nan
+    distance, height = meta["rise_distance"], meta.get("rise_height")
+    if distance is None:
+        return math.inf, math.nan
+    return float(distance), math.nan if height is None else float(height)
 
 
 def split_by_episode(data: VaeDataset, val_fraction: float, seed: int) -> tuple[np.ndarray, np.ndarray]:
@@ -273,6 +300,69 @@ def linear_probe(
         predicted = (xv @ w + b > 0).numpy()
     positive_rate = float(y_val.mean())
     return float((predicted == y_val.astype(bool)).mean()), max(positive_rate, 1.0 - positive_rate)
+
+
+def ridge_predict(x_train: np.ndarray, y_train: np.ndarray, x_val: np.ndarray, l2: float = 1e-3) -> np.ndarray:
+    """Ridge regression from standardised latents to y, fitted on train (closed form, intercept unpenalised, L2
+    weight `l2` per frame); its predictions on x_val."""
+    mean, std = x_train.mean(0), x_train.std(0) + 1e-6
+    xt, xv = (x_train - mean) / std, (x_val - mean) / std
+    offset = float(y_train.mean())
+    gram = xt.T @ xt + l2 * len(xt) * np.eye(xt.shape[1])
+    w = np.linalg.solve(gram, xt.T @ (y_train - offset))
+    return xv @ w + offset
+
+
+def ridge_r2(
+    x_train: np.ndarray, y_train: np.ndarray, x_val: np.ndarray, y_val: np.ndarray, l2: float = 1e-3
+) -> float:
+    """R² on val of `ridge_predict`: 1 - SS_res / SS_tot with SS_tot around val's own mean, so 0 for predicting
+    that mean and negative when worse. NaN when there is too little to fit or val has no spread."""
+    if len(y_train) < 2 or len(y_val) < 2:
+        return math.nan
+    return r_squared(y_val, ridge_predict(x_train, y_train, x_val, l2))
+
+
+def knn_r2(x_train: np.ndarray, y_train: np.ndarray, x_val: np.ndarray, y_val: np.ndarray, k: int = 5) -> float:
+    """R² on val of a k-nearest-neighbour mean on standardised latents: is the target there at all, linearly
+    readable or not (shown beside the ridge probe; PPO's MLP reads non-linear codes too)."""
+    if len(x_val) < 2 or len(x_train) < k:
+        return math.nan
+    mean, std = x_train.mean(0), x_train.std(0) + 1e-6
+    xt, xv = torch.from_numpy((x_train - mean) / std), torch.from_numpy((x_val - mean) / std)
+    nearest = torch.cdist(xv, xt).topk(k, largest=False).indices.numpy()
+    return r_squared(y_val, y_train[nearest].mean(axis=1))
+
+
+def r_squared(y: np.ndarray, predicted: np.ndarray) -> float:
+    """Coefficient of determination; NaN when y has no spread."""
+    y, predicted = np.asarray(y, dtype=np.float64), np.asarray(predicted, dtype=np.float64)
+    total = float(((y - y.mean()) ** 2).sum())
+    return 1.0 - float(((y - predicted) ** 2).sum()) / total if total > 1e-12 else math.nan
+
+
+def rise_probes(
+    train_mu: np.ndarray, train_rise: tuple[np.ndarray, np.ndarray], val_mu: np.ndarray,
+    val_rise: tuple[np.ndarray, np.ndarray],
+) -> dict[str, float]:
+    """Probes of what the gait needs, on held-out episodes: R² of the distance to the next rise ahead and of its
+    height, ridge (linear) and kNN. Both only on frames with a rise within the height map's reach: with nothing
+    ahead there is no distance or height to predict, so those frames are left out (and counted), and whether a
+    rise is in range at all is a separate linear classification probe."""
+    (train_d, train_h), (val_d, val_h) = train_rise, val_rise
+    train_in, val_in = np.isfinite(train_d), np.isfinite(val_d)
+    labelled_train, labelled_val = ~np.isnan(train_d), ~np.isnan(val_d)  # inf (no rise) is a label, nan is not
+    accuracy, baseline = linear_probe(
+        train_mu[labelled_train], train_in[labelled_train], val_mu[labelled_val], val_in[labelled_val]
+    )
+    out = {"rise_in_range_accuracy": accuracy, "rise_in_range_baseline": baseline}
+    for name, train_y, val_y in (("rise_distance", train_d, val_d), ("rise_height", train_h, val_h)):
+        tr, va = train_in & np.isfinite(train_y), val_in & np.isfinite(val_y)
+        out[f"{name}_r2"] = ridge_r2(train_mu[tr], train_y[tr], val_mu[va], val_y[va])
+        out[f"{name}_knn_r2"] = knn_r2(train_mu[tr], train_y[tr], val_mu[va], val_y[va])
+    out["rise_val_frames"] = float(val_in.sum())
+    out["rise_val_share"] = float(val_in.sum() / max(1, labelled_val.sum())) if labelled_val.any() else math.nan
+    return out
 
 
 def knn_accuracy(x_train: np.ndarray, y_train: np.ndarray, x_val: np.ndarray, y_val: np.ndarray, k: int = 5) -> float:
@@ -390,6 +480,31 @@ def latent_map(mu: np.ndarray, block_ahead: np.ndarray) -> Figure:
     ax.set_ylabel(f"PC2 ({100 * explained[1]:.0f}% var)" if len(explained) > 1 else "PC2")
     ax.set_title("Validation latent means (PCA)")
     ax.legend(loc="best", fontsize=8)
+    return fig
+
+
+def rise_probe_figure(
+    train_mu: np.ndarray, train_rise: tuple[np.ndarray, np.ndarray], val_mu: np.ndarray,
+    val_rise: tuple[np.ndarray, np.ndarray], metrics: dict[str, float],
+) -> Figure:
+    """Ridge predictions against the truth on validation frames with a rise in range: distance and height."""
+    fig = Figure(figsize=(9, 4), layout="constrained")
+    axes = fig.subplots(1, 2)
+    in_train, in_val = np.isfinite(train_rise[0]), np.isfinite(val_rise[0])
+    for ax, k, name, unit in ((axes[0], 0, "rise_distance", "distance to the next rise"),
+                              (axes[1], 1, "rise_height", "height of the next rise")):
+        tr, va = in_train & np.isfinite(train_rise[k]), in_val & np.isfinite(val_rise[k])
+        ax.set(xlabel=f"true {unit} (m)", ylabel="ridge prediction (m)")
+        if tr.sum() < 2 or va.sum() < 1:
+            ax.set_title(f"{name}: too few frames")
+            continue
+        truth = val_rise[k][va]
+        ax.scatter(truth, ridge_predict(train_mu[tr], train_rise[k][tr], val_mu[va]), s=5, alpha=0.5)
+        lo, hi = float(truth.min()), float(truth.max())
+        ax.plot([lo, hi], [lo, hi], color="k", lw=0.8)
+        ax.set_title(f"{name}: R² {metrics[f'{name}_r2']:.2f} (kNN {metrics[f'{name}_knn_r2']:.2f}), {va.sum()} frames",
+                     fontsize=9)
+    fig.suptitle("Probes from the latent mean, held-out episodes, frames with a rise within the height map's reach")
     return fig
 
 
@@ -526,8 +641,12 @@ def train_vae(cfg: VaeConfig, frames: Iterable[Frame] | None = None) -> dict[str
     threshold_accuracy, threshold_baseline = linear_probe(
         train_mu, block_ahead[train_idx], val_mu, block_ahead[val_idx]
     )
+    train_rise = (data.rise_distance[train_idx], data.rise_height[train_idx])
+    val_rise = (data.rise_distance[val_idx], data.rise_height[val_idx])
+    rise = rise_probes(train_mu, train_rise, val_mu, val_rise)
     live.log_image("recon_grid.png", recon_grid(model, data, val_idx))
     live.log_image("latent_map.png", latent_map(val_mu, block_ahead[val_idx]))
+    live.log_image("rise_probes.png", rise_probe_figure(train_mu, train_rise, val_mu, val_rise, rise))
 
     last = history[-1]
     metrics = {name: last[name] for name in _EPOCH_KEYS}
@@ -539,6 +658,7 @@ def train_vae(cfg: VaeConfig, frames: Iterable[Frame] | None = None) -> dict[str
         "probe_threshold_baseline": threshold_baseline,
         "probe_knn_accuracy": knn_accuracy(train_mu, block_ahead[train_idx], val_mu, block_ahead[val_idx]),
         "latent/active_dims": active_dims(val_mu),
+        **{f"probe/{name}": value for name, value in rise.items()},
         "data/train_frames": len(train_idx),
         "data/val_frames": len(val_idx),
         "data/val_episodes": n_val_eps,
@@ -551,6 +671,8 @@ def train_vae(cfg: VaeConfig, frames: Iterable[Frame] | None = None) -> dict[str
     console.log(
         f"val loss {metrics['val/loss']:.2f} (recon {metrics['val/recon']:.2f}, KL {metrics['val/kl']:.2f}); "
         f"probe {probe_accuracy:.3f} vs baseline {probe_baseline:.3f} (threshold probe {threshold_accuracy:.3f}); "
+        f"rise probes R² distance {rise['rise_distance_r2']:.3f}, height {rise['rise_height_r2']:.3f} "
+        f"(kNN {rise['rise_distance_knn_r2']:.3f}, {rise['rise_height_knn_r2']:.3f}); "
         f"{metrics['latent/active_dims']}/{cfg.latent_dim} active latent dims; "
         f"{metrics['train/images_per_s']:.0f} images/s; encoder -> {out_dir}"
     )
@@ -563,8 +685,12 @@ __all__ = [
     "active_dims",
     "build_dataset",
     "configure_threads",
+    "knn_r2",
     "linear_probe",
     "load_dataset",
+    "ridge_predict",
+    "ridge_r2",
+    "rise_probes",
     "split_by_episode",
     "train_step",
     "train_vae",

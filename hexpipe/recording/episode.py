@@ -87,7 +87,7 @@ class EpisodeLog:
                  "x": xy[:, 0].tolist(), "y": xy[:, 1].tolist()},
             step={"step": env.steps, "time": env.steps * env.control_dt, "reward": float(reward),
                   "power": float(info.get("power", 0.0)), "energy": float(info.get("energy", 0.0)),
-                  "distance": float(info.get("distance", 0.0)), "obstacle_distance": env.obstacle_distance(),
+                  "distance": float(info.get("distance", 0.0)), **env.terrain_labels(),  # null: nothing ahead
                   "termination": info.get("termination") or "", "terrain": env.terrain.name},
         )
         self.frames += 1

@@ -98,6 +98,12 @@ def load_policy(
         want, got = ("blind", "one that sees the terrain") if expect_blind else ("seeing", "a blind one")
         raise PolicyError(f"{directory}: expected a {want} policy, found {got} (policy.json blind={blind})")
 
+    trained_position = config.get("observe_position", True)  # policies from before the setting saw x, y
+    if trained_position != params.task.observe_position:
+        raise PolicyError(
+            f"{directory}: policy was trained with task.observe_position={str(trained_position).lower()}, params now "
+            f"have {str(params.task.observe_position).lower()}; evaluate with the training setting or {_RETRAIN}"
+        )
     encoder = None if blind else _load_matching_encoder(directory, config, params)
     dim = int(config["observation_dim"])
     produced = _feature_dim(params, encoder)

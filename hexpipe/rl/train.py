@@ -9,6 +9,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
 from stable_baselines3 import PPO
 from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecEnv, VecEnvWrapper, VecNormalize
@@ -16,19 +17,22 @@ from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecEnv,
 from hexpipe.config import Params, params_hash
 from hexpipe.envs.hexapod import HexapodEnv
 from hexpipe.rl.checkpoint import MODEL, NORMALISATION, latest_checkpoint, save_checkpoint, save_policy
+from hexpipe.rl.curriculum import Curriculum, CurriculumStats
 from hexpipe.rl.features import TerrainFeatures
 
 POLICY_CONFIG = "policy.json"
 
 
-def env_factory(params: Params, terrain: str, sensors: tuple[str, ...], randomize: bool) -> Callable[[], HexapodEnv]:
-    """A picklable constructor for one environment (SubprocVecEnv builds it in the worker)."""
+def env_factory(params: Params, terrain: str, sensors: tuple[str, ...], randomize: bool) -> Callable[[], gym.Env]:
+    """A picklable constructor for one environment (SubprocVecEnv builds it in the worker); with ppo.curriculum it
+    keeps its own difficulty level (hexpipe/rl/curriculum.py)."""
     task = params.task.model_copy(update={"sensors": sensors})
 
-    def make() -> HexapodEnv:
-        return HexapodEnv(
+    def make() -> gym.Env:
+        env = HexapodEnv(
             terrain, sim=params.sim, cpg=params.cpg, sensors=params.sensors, task=task, randomize=randomize
         )
+        return Curriculum(env, goal=task.goal_distance) if params.ppo.curriculum else env
 
     return make
 
@@ -99,6 +103,7 @@ def policy_config(params: Params, encoder, observation_dim: int) -> dict[str, An
         "cpg": params.cpg.model_dump(mode="json"),
         "train_terrains": list(params.ppo.train_terrains),
         "randomize": params.ppo.randomize,
+        "observe_position": params.task.observe_position,
     }
 
 
@@ -156,6 +161,8 @@ def train_ppo(params: Params, resume: bool = False, show_progress: bool = True) 
     resume_at = model.num_timesteps if start_from is not None else None
     stats = EpisodeStats(live, log_path=report_dir / "episodes.jsonl", resume_at=resume_at)
     callbacks = [stats, Checkpoints(checkpoints, cfg.checkpoint_every)]
+    if cfg.curriculum:
+        callbacks.append(CurriculumStats(live))  # after stats, which sets live.step for this rollout
     if show_progress:
         callbacks.append(RichProgress(cfg.total_timesteps, stats))
     remaining = cfg.total_timesteps - model.num_timesteps

@@ -21,6 +21,8 @@ YAML format (see terrains/*.yaml for commented examples; every section is option
             ramp: 0.3, flat: 0.1}
     stairs: {start: 1.0, steps: 3, rise: 0.05, run: 0.35, top: 2.0, width: 2.0}
     random_blocks: {count: [1, 3], height: [0.06, 0.12], depth: [0.2, 1.0], face: [0.8, 2.6], gap: 0.4}
+    varied: {difficulty: 1.0, blocks: 0.7, rough: 0.2, flat: 0.1, count: [1, 3], height: [0.04, 0.12],
+             depth: [0.2, 1.0], face: [0.6, 2.6], gap: 0.4, amplitude: [0.015, 0.035]}
 
 All lengths are metres, angles radians. `center` is the box centre and `size` its full extents;
 `face` is the x of a block's near face, `depth` its extent along x, `width` across (centred on `y`).
@@ -256,6 +258,23 @@ class Terrain:
         fine = np.linspace(lo, float(coarse[k]), 51)[1:]
         return float(fine[first_rise(fine) or 0])
 
+    def rise_ahead(
+        self, x: float, y: float, yaw: float, max_range: float, threshold: float = 0.03, span: float = 0.1
+    ) -> tuple[float, float]:
+        """(distance, height) of the first rise ahead: where the terrain along heading `yaw` (rad) from (x, y)
+        first climbs more than `threshold` above the height under (x, y) (as `obstacle_distance`), and how high it
+        climbs (m above the height under (x, y)) within `span` m past that point, the footprint of a foot that
+        lands on it. A block's height for a block, one riser for stairs. (inf, nan) if nothing rises within
+        `max_range` (m). Labels for the VAE probes; pure NumPy.
+        """
+        distance = self.obstacle_distance(x, y, yaw, threshold=threshold, max_range=max_range)
+        if not math.isfinite(distance):
+            return math.inf, math.nan
+        d = distance + np.linspace(0.0, span, 21)
+        c, s = math.cos(yaw), math.sin(yaw)
+        top = float(self.height_at(x + d * c, y + d * s).max())
+        return distance, top - float(self.height_at(x, y))
+
     def build(self, client: int) -> list[int]:
         """Create the terrain as static bodies in PyBullet client `client`; returns their body ids.
 
@@ -465,6 +484,45 @@ def random_blocks(
     return ()
 
 
+VARIANTS = ("blocks", "rough", "flat")  # the kinds of episode a `varied` terrain draws from
+
+
+def _lerp(lo: float, hi: float, t: float) -> float:
+    return lo + (hi - lo) * t
+
+
+def varied(
+    rng: np.random.Generator,
+    difficulty: float = 1.0,
+    weights: tuple[float, float, float] = (0.7, 0.2, 0.1),
+    count: tuple[int, int] = (1, 3),
+    height: Vec2 = (0.04, 0.12),
+    depth: Vec2 = (0.2, 1.0),
+    face: Vec2 = (0.6, 2.6),
+    gap: float = 0.4,
+    amplitude: Vec2 = (0.015, 0.035),
+    width: float = 2.0,
+) -> tuple[str, tuple[Box, ...], tuple[HeightField, ...]]:
+    """A training episode: (variant, boxes, height fields), the variant drawn from VARIANTS by `weights`.
+
+    `difficulty` in [0, 1] (legged_gym style) sets how far up their ranges the hard parts reach: block heights are
+    uniform in [height low, lerp(height, difficulty)], counts in [count low, round(lerp(count, difficulty))], and
+    the bumps' amplitude is lerp(amplitude, difficulty). At 0: one block of the lowest height, or the gentlest
+    bumps; at 1: `random_blocks` over the whole ranges. Depths and face positions are drawn over their whole
+    ranges at every difficulty: they vary what the robot sees, not how hard it is to cross.
+    """
+    p = np.asarray(weights, dtype=float)
+    variant = VARIANTS[int(rng.choice(len(VARIANTS), p=p / p.sum()))]
+    if variant == "blocks":
+        top_count = round(_lerp(count[0], count[1], difficulty))
+        top_height = _lerp(height[0], height[1], difficulty)
+        boxes = random_blocks(rng, (count[0], top_count), (height[0], top_height), depth, face, gap, width)
+        return variant, boxes, ()
+    if variant == "rough":
+        return variant, (), (rough_field(rng, amplitude=_lerp(amplitude[0], amplitude[1], difficulty)),)
+    return variant, (), ()
+
+
 # ----------------------------------------------------------------------------------------------------------
 # Recipes (validated; what YAML files and scenario names turn into)
 # ----------------------------------------------------------------------------------------------------------
@@ -587,6 +645,38 @@ class RandomBlocksSpec(_Spec):
     width: Pos = 2.0
 
 
+class VariedSpec(_Spec):
+    """A training distribution with a difficulty; see `varied`. Weights pick the episode's variant."""
+
+    difficulty: Annotated[float, Field(strict=True, ge=0, le=1, allow_inf_nan=False)] = 1.0
+    blocks: NonNeg = 0.7  # weight of block episodes
+    rough: NonNeg = 0.2  # weight of rough-ground episodes
+    flat: NonNeg = 0.1  # weight of flat episodes
+    count: Annotated[tuple[int, int], _range(integer=True)] = (1, 3)
+    height: Annotated[Vec2, _range(positive=True)] = (0.04, 0.12)
+    depth: Annotated[Vec2, _range(positive=True)] = (0.2, 1.0)
+    face: Annotated[Vec2, _range()] = (0.6, 2.6)
+    gap: NonNeg = 0.4
+    amplitude: Annotated[Vec2, _range()] = (0.015, 0.035)
+    width: Pos = 2.0
+
+    @model_validator(mode="after")
+    def _bounds(self) -> VariedSpec:
+        if self.blocks + self.rough + self.flat <= 0:
+            raise ValueError("blocks, rough and flat weights are all 0; give at least one a positive weight")
+        checks = (
+            ("count", self.count[0] >= 1 and self.count[1] <= 6, "integers in [1, 6]"),
+            ("height", self.height[1] <= 0.2, "heights up to 0.2 m (the highest swing clears about 0.2 m)"),
+            ("depth", self.depth[1] <= 3.0, "depths up to 3.0 m"),
+            ("face", self.face[0] >= 0.5, "faces from 0.5 m (the front feet start about 0.47 m ahead)"),
+            ("amplitude", self.amplitude[0] >= 0 and self.amplitude[1] <= 0.1, "amplitudes in [0, 0.1] m"),
+        )
+        for key, ok, allowed in checks:
+            if not ok:
+                raise ValueError(f"{key}: expected {allowed}, got {_show(getattr(self, key))}")
+        return self
+
+
 def _box_kind(value: Any) -> str:
     is_block = isinstance(value, BlockSpec) or (isinstance(value, dict) and "face" in value)
     return "block" if is_block else "box"
@@ -606,11 +696,15 @@ class TerrainRecipe(_Spec):
     rough: RoughSpec | None = None
     stairs: StairsSpec | None = None
     random_blocks: RandomBlocksSpec | None = None
+    varied: VariedSpec | None = None
 
 
-def realize(recipe: TerrainRecipe, rng: np.random.Generator) -> Terrain:
+def realize(recipe: TerrainRecipe, rng: np.random.Generator, difficulty: float | None = None) -> Terrain:
     """Make `recipe` concrete. Deterministic given the rng state; only random parts consume draws
-    (rough first, then random blocks). Random blocks avoid each other, not the recipe's fixed boxes."""
+    (rough first, then random blocks, then varied). Random blocks avoid each other, not the recipe's fixed boxes.
+    `difficulty` in [0, 1] overrides the `varied` section's own (a curriculum's level); other sections ignore it."""
+    if difficulty is not None and not 0.0 <= difficulty <= 1.0:
+        raise TerrainError(f"difficulty: expected a number in [0, 1], got {difficulty!r}")
     boxes: list[Box] = []
     for spec in recipe.boxes:
         if isinstance(spec, BlockSpec):
@@ -624,6 +718,14 @@ def realize(recipe: TerrainRecipe, rng: np.random.Generator) -> Terrain:
         fields.append(rough_field(rng, r.x, r.y, r.cell, r.amplitude, r.smoothing, r.ramp, r.flat))
     if (b := recipe.random_blocks) is not None:
         boxes.extend(random_blocks(rng, b.count, b.height, b.depth, b.face, b.gap, b.width))
+    if (v := recipe.varied) is not None:
+        level = v.difficulty if difficulty is None else difficulty
+        weights = (v.blocks, v.rough, v.flat)
+        _, more_boxes, more_fields = varied(
+            rng, level, weights, v.count, v.height, v.depth, v.face, v.gap, v.amplitude, v.width
+        )
+        boxes.extend(more_boxes)
+        fields.extend(more_fields)
     return Terrain(name=recipe.name, boxes=tuple(boxes), heightfields=tuple(fields), friction=recipe.friction)
 
 
@@ -642,6 +744,8 @@ SCENARIOS: dict[str, TerrainRecipe] = {
     "rough": TerrainRecipe(name="rough", rough=RoughSpec()),
     "random_blocks": TerrainRecipe(name="random_blocks", random_blocks=RandomBlocksSpec()),
     "stairs": TerrainRecipe(name="stairs", stairs=StairsSpec()),
+    # A training distribution: blocks of every height, depth, count and position, rough and flat episodes.
+    "varied": TerrainRecipe(name="varied", varied=VariedSpec()),
 }
 
 
@@ -649,6 +753,7 @@ _SECTION_MODELS: dict[str, type[BaseModel]] = {
     "rough": RoughSpec,
     "stairs": StairsSpec,
     "random_blocks": RandomBlocksSpec,
+    "varied": VariedSpec,
     "box": BoxSpec,
     "block": BlockSpec,
 }
@@ -726,6 +831,7 @@ def make_terrain(name_or_path: str | Path, seed: int | None = 0) -> Terrain:
 
 __all__ = [
     "SCENARIOS",
+    "VARIANTS",
     "BlockSpec",
     "Box",
     "BoxSpec",
@@ -736,6 +842,7 @@ __all__ = [
     "Terrain",
     "TerrainError",
     "TerrainRecipe",
+    "VariedSpec",
     "block",
     "load_terrain",
     "make_terrain",
@@ -744,4 +851,5 @@ __all__ = [
     "realize",
     "rough_field",
     "stairs",
+    "varied",
 ]
