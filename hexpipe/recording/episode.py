@@ -11,6 +11,7 @@ import math
 from pathlib import Path
 from typing import Any
 
+import foxglove
 import numpy as np
 
 from hexpipe import __version__
@@ -32,13 +33,16 @@ def _pitch_quaternion(pitch: float) -> np.ndarray:
 class EpisodeLog:
     """Writes one episode of `env` to `path`; call `step` after reset and after every env.step."""
 
-    def __init__(self, env: HexapodEnv, path: Path, metadata: dict[str, dict[str, str]], log_every: int = 1,
-                 sensors: tuple[str, ...] = SENSORS):
+    def __init__(self, env: HexapodEnv, path: Path | None, metadata: dict[str, dict[str, str]], log_every: int = 1,
+                 sensors: tuple[str, ...] = SENSORS, context: foxglove.Context | None = None, time_offset_ns: int = 0):
+        """path None: log only to `context` (e.g. a live server); time_offset_ns shifts every stamp (one stream of
+        several episodes keeps its time increasing)."""
         self.env = env
         self.log_every = log_every
         self.sensors = sensors
         self.frames = 0
-        self.writer = EpisodeWriter(path, metadata)
+        self.time_offset_ns = time_offset_ns
+        self.writer = EpisodeWriter(path, metadata, context=context)
         self._names = ["base_link", *env.robot_spec.link_names]
         cfg = env.sensor_cfg
         self._camera_tf = (
@@ -48,8 +52,16 @@ class EpisodeLog:
             np.array([*env.heightmap.origin, 0.0]), np.array([0.0, 0.0, 0.0, 1.0]),
             (env.heightmap.cell_x, env.heightmap.cell_y),
         )
-        self.writer.log_scene(0, env.terrain.boxes, env.terrain.heightfields)
-        self.writer.log_robot(0, robot_shapes(env.robot_spec))
+        self.log_static(time_offset_ns)
+
+    def log_static(self, t_ns: int) -> None:
+        """The terrain and the robot's geometry (logged once per file; a live stream repeats them for late viewers)."""
+        self.writer.log_scene(t_ns, self.env.terrain.boxes, self.env.terrain.heightfields)
+        self.writer.log_robot(t_ns, robot_shapes(self.env.robot_spec))
+
+    def now_ns(self) -> int:
+        """The stamp of the env's current step (ns): sim time, shifted by time_offset_ns."""
+        return self.time_offset_ns + 1 + round(self.env.steps * self.env.control_dt * 1e9)
 
     def __enter__(self) -> EpisodeLog:
         return self
@@ -62,7 +74,7 @@ class EpisodeLog:
         env = self.env
         if not force and env.steps % self.log_every:
             return False
-        t_ns = 1 + round(env.steps * env.control_dt * 1e9)
+        t_ns = self.now_ns()
         poses = env.robot.link_poses()
         base_pos, base_quat = poses[0]
         transforms = [(WORLD_FRAME, name, pos, quat) for name, (pos, quat) in zip(self._names, poses, strict=True)]

@@ -1,0 +1,265 @@
+"""`hexpipe play`: watch one controller on one terrain, as rl-zoo's `enjoy` does for its agents.
+
+One or more seeded episodes of the trained policy (eval.policy_dir), a blind policy, or a fixed gait, through the
+same `run_episode` as `hexpipe evaluate` (same controllers, MCAP logging, videos and metrics). Optionally streamed
+live to Foxglove: a foxglove-sdk WebSocket server publishes the very topics of the MCAP files (the recording code's
+`EpisodeLog` on the server's context), paced at `speed` x real time.
+"""
+
+from __future__ import annotations
+
+import ipaddress
+import math
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from types import TracebackType
+from typing import Any
+
+from hexpipe.config import ConfigError, Params
+from hexpipe.evaluation.controllers import ControllerSpec, Gait, gait_label
+from hexpipe.evaluation.episodes import EpisodeJob, StepHook, run_episode
+from hexpipe.evaluation.suite import load_scenarios
+from hexpipe.recording.writer import TOPIC_ROBOT, TOPIC_TERRAIN
+
+LOOPBACK = ("127.0.0.1", "localhost", "::1")
+GAP_NS = 1_000_000_000  # between episodes of one live stream: its time keeps increasing (1 s)
+
+
+class PlayError(ValueError):
+    """Nothing to play, or a live server that cannot start; one line saying what to do."""
+
+
+@dataclass(frozen=True)
+class LiveOptions:
+    """The live Foxglove view: where the server listens, how fast episodes run, and whether to wait for a viewer."""
+
+    host: str = "127.0.0.1"
+    port: int = 8765  # Foxglove's default; 0 picks a free port
+    speed: float = 1.0  # sim seconds per wall-clock second
+    wait: bool = True  # hold the first step until a viewer subscribes
+
+
+def exposes_stream(host: str) -> bool:
+    """True if binding `host` lets other machines connect (anything but loopback)."""
+    if host in LOOPBACK:
+        return False
+    try:
+        return not ipaddress.ip_address(host).is_loopback
+    except ValueError:  # a host name: assume it is reachable
+        return True
+
+
+def parse_gait(text: str, params: Params) -> Gait:
+    """'a,b,omega' (rad, rad, rad/s) -> a gait inside the CPG bounds, or ConfigError naming the bad value."""
+    parts = [p.strip() for p in text.split(",")]
+    try:
+        values = tuple(float(p) for p in parts)
+    except ValueError:
+        values = ()
+    if len(values) != 3 or not all(math.isfinite(v) for v in values):
+        raise ConfigError(f"--gait {text!r}: expected three numbers a,b,omega (rad, rad, rad/s), e.g. 0.25,0.4,4.71")
+    lower, upper = params.cpg.lower, params.cpg.upper
+    for name, value, lo, hi in zip(("a", "b", "omega"), values, lower, upper, strict=True):
+        if not lo <= value <= hi:
+            raise ConfigError(f"--gait: {name}={value:g} outside the CPG bounds [{lo:g}, {hi:g}] (cpg.lower/upper)")
+    return values  # type: ignore[return-value]
+
+
+def controller_spec(params: Params, policy: str | None, blind: str | None, gait: str | None) -> ControllerSpec:
+    """What to play: --gait, --blind DIR, --policy DIR, or by default the trained policy in eval.policy_dir."""
+    if sum(x is not None for x in (policy, blind, gait)) > 1:
+        raise PlayError("choose one controller: --policy DIR, --blind DIR or --gait a,b,omega")
+    if gait is not None:
+        return ControllerSpec("fixed_gait", gait=parse_gait(gait, params))
+    if blind is not None:
+        return ControllerSpec("blind", blind, expect_blind=True)
+    if policy is None:
+        policy = params.eval.policy_dir
+        if not Path(policy).is_dir():
+            raise PlayError(
+                f"no trained policy at {policy} (eval.policy_dir): run the pipeline first (`make repro`), pass "
+                "--policy DIR, or watch a fixed gait with --gait a,b,omega"
+            )
+    return ControllerSpec("policy", policy)
+
+
+def numbered(path: Path | None, index: int, episodes: int) -> Path | None:
+    """`path` for a single episode; `stem_<index>.suffix` when there are several."""
+    if path is None or episodes == 1:
+        return path
+    return path.with_name(f"{path.stem}_{index}{path.suffix}")
+
+
+class _Viewers:
+    """foxglove-sdk ServerListener: notes subscriptions (called on the server's thread; only sets flags)."""
+
+    def __init__(self) -> None:
+        self.subscribed = threading.Event()  # any client subscribed to any topic
+        self.resend_static = threading.Event()  # someone (re)subscribed to /robot or /terrain: log them again
+
+    def on_subscribe(self, client: Any, channel: Any) -> None:
+        self.subscribed.set()
+        if channel.topic in (TOPIC_ROBOT, TOPIC_TERRAIN):
+            self.resend_static.set()
+
+
+class LiveStream:
+    """A Foxglove WebSocket server (foxglove-sdk's own) for one play session; `hook(job)` streams one episode.
+
+    Each episode is logged by the recording code's `EpisodeLog` on the server's context, so the live topics and
+    schemas are those of the MCAP files. The robot and terrain, logged once per file, are logged again whenever a
+    viewer subscribes to them, so a viewer that connects late still sees them. Use as a context manager: the server
+    stops on exit, also on Ctrl-C.
+    """
+
+    def __init__(self, params: Params, options: LiveOptions, echo: Callable[[str], None] = print) -> None:
+        if not options.speed > 0 or not math.isfinite(options.speed):
+            raise ConfigError(f"--speed {options.speed}: must be a positive number (1 = real time)")
+        self.params, self.options, self.echo = params, options, echo
+        self.viewers = _Viewers()
+        self.server: Any = None
+        self.context: Any = None
+        self._log: Any = None  # the episode being streamed
+        self._next_offset_ns = 0
+        self._first = True
+
+    @property
+    def url(self) -> str:
+        host = self.options.host
+        return f"ws://{f'[{host}]' if ':' in host else host}:{self.server.port}"
+
+    def __enter__(self) -> LiveStream:
+        import foxglove
+
+        self.context = foxglove.Context()
+        try:
+            self.server = foxglove.start_server(
+                name="hexpipe play", host=self.options.host, port=self.options.port, context=self.context,
+                server_listener=self.viewers,
+            )
+        except RuntimeError as exc:
+            reason = str(exc).removeprefix("FoxgloveError: ")
+            raise PlayError(f"cannot start the live server on {self.options.host}:{self.options.port} ({reason}); "
+                            "pick another --port") from None
+        return self
+
+    def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
+                 tb: TracebackType | None) -> None:
+        try:
+            if self._log is not None:
+                self._log.__exit__(exc_type, exc, tb)  # closes the channels (the server unadvertises them)
+                self._log = None
+        finally:
+            self.server.stop()
+
+    def hook(self, job: EpisodeJob) -> StepHook:
+        """The `run_episode` step hook that streams `job`'s episode and paces it."""
+        from hexpipe import __version__
+        from hexpipe.recording.episode import EpisodeLog
+
+        speed = self.options.speed
+        started = 0.0
+
+        def on_step(env: Any, reward: float, info: dict[str, Any], ended: bool) -> None:
+            nonlocal started
+            if self._log is None:  # just after reset
+                meta = {"episode": {"seed": str(job.seed), "terrain": env.terrain.name, "hexpipe_version": __version__,
+                                    "controller": job.controller.name}}
+                self._log = EpisodeLog(env, None, meta, context=self.context, time_offset_ns=self._next_offset_ns)
+                if self._first and self.options.wait:
+                    self._wait_for_viewer()
+                self._first = False
+                started = time.monotonic()
+            if self.viewers.resend_static.is_set():
+                self.viewers.resend_static.clear()
+                self._log.log_static(self._log.now_ns())
+            self._log.step(reward, info, force=True)
+            delay = started + info["time"] / speed - time.monotonic()
+            if delay > 0:
+                time.sleep(delay)
+            if ended:
+                self._next_offset_ns = self._log.now_ns() + GAP_NS
+                self._log.close()
+                self._log = None
+
+        return on_step
+
+    def _wait_for_viewer(self) -> None:
+        self.echo(f"waiting for a viewer: in Foxglove, Open connection -> {self.url} (Ctrl-C to stop)")
+        while not self.viewers.subscribed.wait(timeout=0.2):  # short waits: Ctrl-C gets through
+            pass
+
+
+def play(
+    params: Params,
+    spec: ControllerSpec,
+    terrain: str,
+    seed: int,
+    episodes: int = 1,
+    mcap: Path | None = None,
+    video: Path | None = None,
+    live: LiveOptions | None = None,
+    echo: Callable[[str], None] = print,
+) -> list[dict[str, Any]]:
+    """Run `episodes` episodes (seeds seed, seed+1, ...) and return their result rows (as in results.csv).
+
+    The terrain and the controller are checked before anything runs (TerrainError, PolicyError, ConfigError).
+    """
+    from hexpipe.evaluation.controllers import build
+
+    if episodes < 1:
+        raise ConfigError(f"--episodes {episodes}: must be at least 1")
+    (scenario,) = load_scenarios([terrain])
+    build(spec, params)  # loads and checks a policy once, before the server starts
+    for path in (mcap, video):
+        if path is not None and path.is_dir():
+            raise PlayError(f"{path}: is a folder; give a file name")
+    if video is not None and video.suffix.lower() not in (".mp4", ".webm"):
+        raise PlayError(f"--video {video}: use a .mp4 (H.264) or .webm (VP9) file name")
+    if mcap is not None and mcap.suffix.lower() != ".mcap":
+        raise PlayError(f"--mcap {mcap}: use a .mcap file name")
+
+    jobs = [EpisodeJob(scenario, spec, i, seed + i, mcap=numbered(mcap, i, episodes),
+                       video=numbered(video, i, episodes)) for i in range(episodes)]
+    rows = []
+    if live is None:
+        for job in jobs:
+            rows.append(run_episode(params, job).row)
+        return rows
+    if exposes_stream(live.host):
+        echo(f"warning: --host {live.host} exposes the live stream, unauthenticated, to every machine that can "
+             f"reach this one on port {live.port}; the default 127.0.0.1 keeps it on this machine")
+    with LiveStream(params, live, echo) as stream:
+        echo(f"live: {stream.url} (Foxglove: Open connection; layout layouts/hexpipe_layout.json)")
+        for job in jobs:
+            rows.append(run_episode(params, job, on_step=stream.hook(job)).row)
+    return rows
+
+
+def describe(spec: ControllerSpec) -> str:
+    if spec.gait is not None:
+        return f"fixed gait {gait_label(spec.gait)}"
+    return f"{spec.name} from {spec.policy_dir}"
+
+
+def summary_lines(rows: list[dict[str, Any]]) -> list[str]:
+    """The one-screen summary: one line per episode, and the means over episodes when there are several."""
+    head = f"{'seed':>6} {'termination':<11} {'distance':>8} {'time':>6} {'CoT':>5} {'a':>5} {'b':>5} {'omega':>5}"
+    lines = [head]
+    for r in rows:
+        lines.append(
+            f"{r['seed']:>6} {r['termination']:<11} {r['distance']:>6.2f} m {r['time']:>4.1f} s "
+            f"{r['cost_of_transport']:>5.2f} {r['a_mean']:>5.2f} {r['b_mean']:>5.2f} "
+            f"{r['omega_mean']:>5.2f}"
+        )
+    if len(rows) > 1:
+        n = len(rows)
+        success = sum(bool(r["success"]) for r in rows)
+        lines.append(f"{'':>6} {f'{success}/{n} goal':<11} {sum(r['distance'] for r in rows) / n:>6.2f} m "
+                     f"{sum(r['time'] for r in rows) / n:>4.1f} s  (means)")
+    lines.append("distance: forward progress (m); CoT: cost of transport E/(m g d); a, b (rad) and omega (rad/s): "
+                 "episode means")
+    return lines
