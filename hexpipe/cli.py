@@ -182,18 +182,18 @@ def play(
 
     cfg = load(params, set_)
     first = cfg.eval.seed if seed is None else seed
-    try:
-        with user_errors():
-            spec = controller_spec(cfg, policy, blind, gait)
-            options = LiveOptions(host=host, port=port, speed=speed, wait=wait) if live else None
-            console.print(f"play: {describe(spec)} on {terrain}, seed {first}"
-                          + (f" (+{episodes - 1} more)" if episodes > 1 else ""), highlight=False)
+    with user_errors():
+        spec = controller_spec(cfg, policy, blind, gait)
+        options = LiveOptions(host=host, port=port, speed=speed, wait=wait) if live else None
+        console.print(f"play: {describe(spec)} on {terrain}, seed {first}"
+                      + (f" (+{episodes - 1} more)" if episodes > 1 else ""), highlight=False)
+        try:
             rows = run_play(cfg, spec, terrain, first, episodes, mcap=mcap, video=video, live=options,
                             echo=lambda text: console.print(text, highlight=False, soft_wrap=True))
-    except typer.Exit as stop:
-        if stop.exit_code == 130:
-            console.print("stopped: unfinished MCAP and video files were removed")
-        raise
+        except KeyboardInterrupt:
+            console.print("stopped (Ctrl-C): the live server, if any, is down; unfinished MCAP and video files "
+                          "were removed")
+            raise typer.Exit(130) from None
     for line in summary_lines(rows):  # the summary goes to stdout
         typer.echo(line)
     for path in (mcap, video):

@@ -93,38 +93,45 @@ def numbered(path: Path | None, index: int, episodes: int) -> Path | None:
     return path.with_name(f"{path.stem}_{index}{path.suffix}")
 
 
-class _Viewers:
-    """foxglove-sdk ServerListener: notes subscriptions (called on the server's thread; only sets flags)."""
+def _viewers_listener() -> Any:
+    """A foxglove-sdk ServerListener that notes subscriptions (called on the server's thread; only sets flags)."""
+    from foxglove.websocket import ServerListener
 
-    def __init__(self) -> None:
-        self.subscribed = threading.Event()  # any client subscribed to any topic
-        self.resend_static = threading.Event()  # someone (re)subscribed to /robot or /terrain: log them again
+    class Viewers(ServerListener):
+        def __init__(self) -> None:
+            self.subscribed = threading.Event()  # any client subscribed to any topic
+            self.last_subscribe = 0.0  # time.monotonic() of the latest subscription
+            self.resend_static = threading.Event()  # someone (re)subscribed to /robot or /terrain: log them again
 
-    def on_subscribe(self, client: Any, channel: Any) -> None:
-        self.subscribed.set()
-        if channel.topic in (TOPIC_ROBOT, TOPIC_TERRAIN):
-            self.resend_static.set()
+        def on_subscribe(self, client: Any, channel: Any) -> None:
+            self.last_subscribe = time.monotonic()
+            self.subscribed.set()
+            if channel.topic in (TOPIC_ROBOT, TOPIC_TERRAIN):
+                self.resend_static.set()
+
+    return Viewers()
 
 
 class LiveStream:
     """A Foxglove WebSocket server (foxglove-sdk's own) for one play session; `hook(job)` streams one episode.
 
-    Each episode is logged by the recording code's `EpisodeLog` on the server's context, so the live topics and
-    schemas are those of the MCAP files. The robot and terrain, logged once per file, are logged again whenever a
-    viewer subscribes to them, so a viewer that connects late still sees them. Use as a context manager: the server
-    stops on exit, also on Ctrl-C.
+    One `EpisodeWriter` on the server's context carries the whole session and `EpisodeLog` fills it, episode after
+    episode, so the live topics and schemas are those of the MCAP files and the channels stay put between episodes
+    (a viewer keeps its subscriptions). The URL is announced once every channel exists: a subscription that races
+    a channel's advertisement can be refused by the server. The robot and terrain, logged once per episode, are
+    logged again whenever a viewer subscribes to them. Use as a context manager: the server stops on exit, also on
+    Ctrl-C.
     """
 
     def __init__(self, params: Params, options: LiveOptions, echo: Callable[[str], None] = print) -> None:
         if not options.speed > 0 or not math.isfinite(options.speed):
             raise ConfigError(f"--speed {options.speed}: must be a positive number (1 = real time)")
         self.params, self.options, self.echo = params, options, echo
-        self.viewers = _Viewers()
+        self.viewers = _viewers_listener()
         self.server: Any = None
-        self.context: Any = None
-        self._log: Any = None  # the episode being streamed
+        self.writer: Any = None
         self._next_offset_ns = 0
-        self._first = True
+        self._announced = False
 
     @property
     def url(self) -> str:
@@ -134,63 +141,70 @@ class LiveStream:
     def __enter__(self) -> LiveStream:
         import foxglove
 
-        self.context = foxglove.Context()
+        from hexpipe.recording.writer import EpisodeWriter
+
+        context = foxglove.Context()
         try:
             self.server = foxglove.start_server(
-                name="hexpipe play", host=self.options.host, port=self.options.port, context=self.context,
+                name="hexpipe play", host=self.options.host, port=self.options.port, context=context,
                 server_listener=self.viewers,
             )
         except RuntimeError as exc:
             reason = str(exc).removeprefix("FoxgloveError: ")
             raise PlayError(f"cannot start the live server on {self.options.host}:{self.options.port} ({reason}); "
                             "pick another --port") from None
+        self.writer = EpisodeWriter(None, {}, context=context)
         return self
 
     def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
                  tb: TracebackType | None) -> None:
         try:
-            if self._log is not None:
-                self._log.__exit__(exc_type, exc, tb)  # closes the channels (the server unadvertises them)
-                self._log = None
+            self.writer.__exit__(exc_type, exc, tb)  # closes the channels
         finally:
             self.server.stop()
 
     def hook(self, job: EpisodeJob) -> StepHook:
         """The `run_episode` step hook that streams `job`'s episode and paces it."""
-        from hexpipe import __version__
         from hexpipe.recording.episode import EpisodeLog
 
         speed = self.options.speed
+        log: EpisodeLog | None = None
         started = 0.0
 
         def on_step(env: Any, reward: float, info: dict[str, Any], ended: bool) -> None:
-            nonlocal started
-            if self._log is None:  # just after reset
-                meta = {"episode": {"seed": str(job.seed), "terrain": env.terrain.name, "hexpipe_version": __version__,
-                                    "controller": job.controller.name}}
-                self._log = EpisodeLog(env, None, meta, context=self.context, time_offset_ns=self._next_offset_ns)
-                if self._first and self.options.wait:
-                    self._wait_for_viewer()
-                self._first = False
-                started = time.monotonic()
-            if self.viewers.resend_static.is_set():
+            nonlocal log, started
+            first_call = log is None  # just after reset
+            if log is None:
+                log = EpisodeLog(env, None, {}, writer=self.writer, time_offset_ns=self._next_offset_ns)
+            elif self.viewers.resend_static.is_set():
                 self.viewers.resend_static.clear()
-                self._log.log_static(self._log.now_ns())
-            self._log.step(reward, info, force=True)
+                log.log_static(log.now_ns())
+            log.step(reward, info, force=True)  # the session's first call creates the JSON channels
+            if first_call:
+                if not self._announced:
+                    self._announced = True
+                    self.echo(f"live: {self.url} (Foxglove: Open connection; layout layouts/hexpipe_layout.json)")
+                    if self.options.wait:
+                        self._wait_for_viewer()
+                        self.viewers.resend_static.clear()
+                        log.log_static(log.now_ns() + 1)
+                started = time.monotonic()
             delay = started + info["time"] / speed - time.monotonic()
             if delay > 0:
                 time.sleep(delay)
             if ended:
-                self._next_offset_ns = self._log.now_ns() + GAP_NS
-                self._log.close()
-                self._log = None
+                self._next_offset_ns = log.now_ns() + GAP_NS
 
         return on_step
 
-    def _wait_for_viewer(self) -> None:
+    def _wait_for_viewer(self, settle_s: float = 0.3, at_most_s: float = 5.0) -> None:
+        """Until a viewer subscribes, then until its subscriptions settle (a client subscribes in one batch)."""
         self.echo(f"waiting for a viewer: in Foxglove, Open connection -> {self.url} (Ctrl-C to stop)")
         while not self.viewers.subscribed.wait(timeout=0.2):  # short waits: Ctrl-C gets through
             pass
+        start = time.monotonic()
+        while time.monotonic() - self.viewers.last_subscribe < settle_s and time.monotonic() - start < at_most_s:
+            time.sleep(0.05)
 
 
 def play(
@@ -222,6 +236,8 @@ def play(
     if mcap is not None and mcap.suffix.lower() != ".mcap":
         raise PlayError(f"--mcap {mcap}: use a .mcap file name")
 
+    # Every control step in the MCAP file, as in the live stream (evaluate keeps every collect.log_every-th).
+    params = params.model_copy(update={"collect": params.collect.model_copy(update={"log_every": 1})})
     jobs = [EpisodeJob(scenario, spec, i, seed + i, mcap=numbered(mcap, i, episodes),
                        video=numbered(video, i, episodes)) for i in range(episodes)]
     rows = []
@@ -233,7 +249,6 @@ def play(
         echo(f"warning: --host {live.host} exposes the live stream, unauthenticated, to every machine that can "
              f"reach this one on port {live.port}; the default 127.0.0.1 keeps it on this machine")
     with LiveStream(params, live, echo) as stream:
-        echo(f"live: {stream.url} (Foxglove: Open connection; layout layouts/hexpipe_layout.json)")
         for job in jobs:
             rows.append(run_episode(params, job, on_step=stream.hook(job)).row)
     return rows

@@ -11,7 +11,6 @@ import math
 from pathlib import Path
 from typing import Any
 
-import foxglove
 import numpy as np
 
 from hexpipe import __version__
@@ -34,15 +33,18 @@ class EpisodeLog:
     """Writes one episode of `env` to `path`; call `step` after reset and after every env.step."""
 
     def __init__(self, env: HexapodEnv, path: Path | None, metadata: dict[str, dict[str, str]], log_every: int = 1,
-                 sensors: tuple[str, ...] = SENSORS, context: foxglove.Context | None = None, time_offset_ns: int = 0):
-        """path None: log only to `context` (e.g. a live server); time_offset_ns shifts every stamp (one stream of
-        several episodes keeps its time increasing)."""
+                 sensors: tuple[str, ...] = SENSORS, writer: EpisodeWriter | None = None, time_offset_ns: int = 0):
+        """Logs to a new file at `path`, or (path None) into `writer`, which it leaves open: a live stream of
+        several episodes keeps its channels. time_offset_ns shifts every stamp, so that stream's time increases."""
+        if (path is None) == (writer is None):
+            raise ValueError("EpisodeLog needs a path or an open writer, not both")
         self.env = env
         self.log_every = log_every
         self.sensors = sensors
         self.frames = 0
         self.time_offset_ns = time_offset_ns
-        self.writer = EpisodeWriter(path, metadata, context=context)
+        self._owns_writer = writer is None
+        self.writer = EpisodeWriter(path, metadata) if writer is None else writer
         self._names = ["base_link", *env.robot_spec.link_names]
         cfg = env.sensor_cfg
         self._camera_tf = (
@@ -67,7 +69,8 @@ class EpisodeLog:
         return self
 
     def __exit__(self, exc_type, exc, tb) -> None:
-        self.writer.__exit__(exc_type, exc, tb)
+        if self._owns_writer:
+            self.writer.__exit__(exc_type, exc, tb)
 
     def step(self, reward: float, info: dict[str, Any], force: bool = False) -> bool:
         """Log the env's current state if this is a kept step (every `log_every`-th, or `force`)."""
@@ -106,7 +109,8 @@ class EpisodeLog:
         return True
 
     def close(self) -> None:
-        self.writer.close()
+        if self._owns_writer:
+            self.writer.close()
 
 
 def episode_metadata(env: HexapodEnv, seed: int, params_json: str, **episode: Any) -> dict[str, dict[str, str]]:
