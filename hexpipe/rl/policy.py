@@ -107,6 +107,7 @@ def load_policy(
         if not path.is_file():
             raise PolicyError(f"incomplete policy in {directory}: {path} not found ({_RETRAIN})")
     config = _read_config(config_path)
+    given = params is not None
     if params is None:
         params = _training_params(config, config_path)
     blind = bool(config["blind"])
@@ -139,7 +140,7 @@ def load_policy(
     return LoadedPolicy(
         name="ppo-blind" if encoder is None else f"ppo{latent}",
         directory=directory, config=config, actor=actor, normaliser=normaliser, encoder=encoder, params=params,
-        drift=_drift(config, params),
+        drift=_drift(config, params) if given else [],
     )
 
 
