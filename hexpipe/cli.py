@@ -186,7 +186,7 @@ def play(
         spec = controller_spec(cfg, policy, blind, gait)
         options = LiveOptions(host=host, port=port, speed=speed, wait=wait) if live else None
         console.print(f"play: {describe(spec)} on {terrain}, seed {first}"
-                      + (f" (+{episodes - 1} more)" if episodes > 1 else ""), highlight=False)
+                      + (f" (+{episodes - 1} more)" if episodes > 1 else ""), highlight=False, soft_wrap=True)
         try:
             rows = run_play(cfg, spec, terrain, first, episodes, mcap=mcap, video=video, live=options,
                             echo=lambda text: console.print(text, highlight=False, soft_wrap=True))
@@ -198,7 +198,8 @@ def play(
         typer.echo(line)
     for path in (mcap, video):
         if path is not None:
-            typer.echo(f"wrote {path}" if episodes == 1 else f"wrote {path.stem}_0..{episodes - 1}{path.suffix}")
+            shown = path if episodes == 1 else path.with_name(f"{path.stem}_0..{episodes - 1}{path.suffix}")
+            typer.echo(f"wrote {shown}")
 
 
 @app.command()
