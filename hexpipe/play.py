@@ -3,7 +3,7 @@
 One or more seeded episodes of the trained policy (eval.policy_dir), a blind policy, or a fixed gait, through the
 same `run_episode` as `hexpipe evaluate` (same controllers, MCAP logging, videos and metrics). Optionally streamed
 live to Foxglove: a foxglove-sdk WebSocket server publishes the very topics of the MCAP files (the recording code's
-`EpisodeLog` on the server's context), paced at `speed` x real time.
+`EpisodeLog` and `EpisodeWriter`, on the server's context), paced at `speed` x real time.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ from types import TracebackType
 from typing import Any
 
 from hexpipe.config import ConfigError, Params
-from hexpipe.evaluation.controllers import ControllerSpec, Gait, gait_label
+from hexpipe.evaluation.controllers import ControllerSpec, Gait, build, gait_label
 from hexpipe.evaluation.episodes import EpisodeJob, StepHook, run_episode
 from hexpipe.evaluation.suite import load_scenarios
 from hexpipe.recording.writer import TOPIC_ROBOT, TOPIC_TERRAIN
@@ -123,10 +123,10 @@ class LiveStream:
     Ctrl-C.
     """
 
-    def __init__(self, params: Params, options: LiveOptions, echo: Callable[[str], None] = print) -> None:
+    def __init__(self, options: LiveOptions, echo: Callable[[str], None] = print) -> None:
         if not options.speed > 0 or not math.isfinite(options.speed):
             raise ConfigError(f"--speed {options.speed}: must be a positive number (1 = real time)")
-        self.params, self.options, self.echo = params, options, echo
+        self.options, self.echo = options, echo
         self.viewers = _viewers_listener()
         self.server: Any = None
         self.writer: Any = None
@@ -222,8 +222,6 @@ def play(
 
     The terrain and the controller are checked before anything runs (TerrainError, PolicyError, ConfigError).
     """
-    from hexpipe.evaluation.controllers import build
-
     if episodes < 1:
         raise ConfigError(f"--episodes {episodes}: must be at least 1")
     (scenario,) = load_scenarios([terrain])
@@ -248,7 +246,7 @@ def play(
     if exposes_stream(live.host):
         echo(f"warning: --host {live.host} exposes the live stream, unauthenticated, to every machine that can "
              f"reach this one on port {live.port}; the default 127.0.0.1 keeps it on this machine")
-    with LiveStream(params, live, echo) as stream:
+    with LiveStream(live, echo) as stream:
         for job in jobs:
             rows.append(run_episode(params, job, on_step=stream.hook(job)).row)
     return rows
