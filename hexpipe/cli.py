@@ -19,6 +19,7 @@ from hexpipe.config import ConfigError, Params, load_params
 
 app = typer.Typer(
     no_args_is_help=True, add_completion=False, pretty_exceptions_enable=False,
+    context_settings={"help_option_names": ["-h", "--help"]},
     help="hexpipe: terrain-adaptive CPG gaits for a hexapod (collect -> train-vae -> train-ppo -> evaluate).",
 )
 console = Console(stderr=True)
@@ -34,12 +35,14 @@ def _user_errors() -> tuple[type[Exception], ...]:
     from hexpipe.evaluation.video import VideoError
     from hexpipe.models.train_vae import VaeDataError
     from hexpipe.models.vae import EncoderError
+    from hexpipe.models.weights import WeightsError
+    from hexpipe.play import PlayError
     from hexpipe.recording.reader import RecordingError
     from hexpipe.rl.policy import PolicyError
     from hexpipe.sim.terrain import TerrainError
 
     return (ConfigError, FileNotFoundError, TerrainError, EncoderError, VaeDataError, RecordingError, PolicyError,
-            VideoError)
+            VideoError, WeightsError, PlayError)
 
 
 @contextmanager
@@ -54,8 +57,20 @@ def user_errors() -> Iterator[None]:
         raise typer.Exit(130) from None
 
 
+def _print_version(value: bool) -> None:
+    if value:
+        from hexpipe import __version__
+
+        print(f"hexpipe {__version__}")
+        raise typer.Exit()
+
+
 @app.callback()
-def _root() -> None:
+def _root(
+    version: Annotated[
+        bool, typer.Option("--version", callback=_print_version, is_eager=True, help="print the version and exit")
+    ] = False,
+) -> None:
     """hexpipe: terrain-adaptive CPG gaits for a hexapod (collect -> train-vae -> train-ppo -> evaluate)."""
 
 
@@ -141,6 +156,50 @@ def evaluate(
     console.print(summary_text)
     if write_page:
         console.print(f"wrote {write_summary(cfg, Path('reports/collect.json'), Path('reports/README.md'))}")
+
+
+@app.command()
+def play(
+    params: ParamsOpt = Path("params.yaml"),
+    set_: SetOpt = None,
+    terrain: Annotated[str, typer.Option(help="scenario name or terrain YAML file")] = "single_block",
+    seed: Annotated[int | None, typer.Option(help="seed of the first episode (default eval.seed)")] = None,
+    episodes: Annotated[int, typer.Option(min=1, help="episodes, seeds seed, seed+1, ...")] = 1,
+    policy: Annotated[str | None, typer.Option(help="trained policy folder (default eval.policy_dir)")] = None,
+    blind: Annotated[str | None, typer.Option(help="a blind policy folder (ppo.blind=true) instead")] = None,
+    gait: Annotated[str | None, typer.Option(help="a fixed gait a,b,omega (rad, rad, rad/s) instead")] = None,
+    mcap: Annotated[Path | None, typer.Option(help="log the episode to this MCAP file (Foxglove)")] = None,
+    video: Annotated[Path | None, typer.Option(help="film it: .mp4 (H.264) or .webm (VP9)")] = None,
+    live: Annotated[bool, typer.Option("--live", help="stream it to Foxglove over WebSocket")] = False,
+    host: Annotated[str, typer.Option(help="--live: address to bind (other than loopback exposes it)")] = "127.0.0.1",
+    port: Annotated[int, typer.Option(min=0, max=65535, help="--live: port (0: any free one)")] = 8765,
+    speed: Annotated[float, typer.Option(help="--live: sim seconds per wall second (1 = real time)")] = 1.0,
+    wait: Annotated[bool, typer.Option(help="--live: start once a viewer has connected")] = True,
+) -> None:
+    """Watch one controller on one terrain: a summary, and optionally MCAP, a video, or a live Foxglove view."""
+    from hexpipe.play import LiveOptions, controller_spec, describe, summary_lines
+    from hexpipe.play import play as run_play
+
+    cfg = load(params, set_)
+    first = cfg.eval.seed if seed is None else seed
+    with user_errors():
+        spec = controller_spec(cfg, policy, blind, gait)
+        options = LiveOptions(host=host, port=port, speed=speed, wait=wait) if live else None
+        console.print(f"play: {describe(spec)} on {terrain}, seed {first}"
+                      + (f" (+{episodes - 1} more)" if episodes > 1 else ""), highlight=False, soft_wrap=True)
+        try:
+            rows = run_play(cfg, spec, terrain, first, episodes, mcap=mcap, video=video, live=options,
+                            echo=lambda text: console.print(text, highlight=False, soft_wrap=True))
+        except KeyboardInterrupt:
+            console.print("stopped (Ctrl-C): the live server, if any, is down; unfinished MCAP and video files "
+                          "were removed")
+            raise typer.Exit(130) from None
+    for line in summary_lines(rows):  # the summary goes to stdout
+        typer.echo(line)
+    for path in (mcap, video):
+        if path is not None:
+            shown = path if episodes == 1 else path.with_name(f"{path.stem}_0..{episodes - 1}{path.suffix}")
+            typer.echo(f"wrote {shown}")
 
 
 @app.command()

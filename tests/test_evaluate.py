@@ -141,8 +141,8 @@ def test_policy_features_match_training_layout(seeing):
     wrapped = TerrainFeatures(DummyVecEnv([lambda: env]), policy.encoder, heightmap_shape=(32, 32))
     batch = {k: v[None] for k, v in obs.items()}
     np.testing.assert_array_equal(policy.features(obs), wrapped.features(batch))
-    action = policy.act(obs)
-    assert action.shape == (3,) and np.all(np.abs(action) <= 1) and np.array_equal(action, policy.act(obs))
+    action = policy.predict(obs)
+    assert action.shape == (3,) and np.all(np.abs(action) <= 1) and np.array_equal(action, policy.predict(obs))
     env.close()
 
 

@@ -63,6 +63,8 @@ def test_dvc_repro_runs_all_stages_then_nothing_then_only_what_changed(tmp_path)
     assert "policy" in table["single_block"] and "open_loop" in table["single_block"]
     assert (repo / "reports/README.md").read_text().count("not run yet") == 0
     assert (repo / "reports/ppo/training_curve.png").is_file()
+    played = run(["hexpipe", "play"], repo)  # after the pipeline, with no options: the policy it trained
+    assert "play: policy from data/models/ppo on single_block, seed 1000" in played and "termination" in played
 
     again = run(["dvc", "repro"], repo)
     assert "Running stage" not in again

@@ -29,6 +29,7 @@ from hexpipe.recording.writer import (
     TOPIC_CPG,
     TOPIC_HEIGHTMAP,
     TOPIC_IMAGE,
+    TOPIC_ROBOT,
     TOPIC_STEP,
     TOPIC_TERRAIN,
     TOPIC_TF,
@@ -307,7 +308,29 @@ def test_log_step_time_must_increase(tmp_path: Path) -> None:
             writer.log_step(DT_NS, transforms=[], joints={}, cpg={}, step={})
 
 
-def test_foxglove_layout_matches_the_topics() -> None:
+SCENE_SCHEMAS = {"foxglove.SceneUpdate", "foxglove.FrameTransforms", "foxglove.Grid"}  # what the 3D panel draws
+
+
+def test_foxglove_layout_shows_every_scene_topic_the_recorder_writes(tmp_path: Path) -> None:
+    """The topics come from a real episode logged by EpisodeLog, not from a copy of the list."""
+    from hexpipe.envs.hexapod import HexapodEnv
+    from hexpipe.recording.episode import EpisodeLog
+
+    env = HexapodEnv("single_block")
+    try:
+        _, info = env.reset(seed=0)
+        with EpisodeLog(env, tmp_path / "ep.mcap", {}) as log:
+            log.step(0.0, info, force=True)
+            _, reward, _, _, info = env.step(np.zeros(3, dtype=np.float32))
+            log.step(reward, info, force=True)
+    finally:
+        env.close()
+    with (tmp_path / "ep.mcap").open("rb") as f:
+        summary = make_reader(f).get_summary()
+    schemas = {c.topic: summary.schemas[c.schema_id].name for c in summary.channels.values()}
+    scene = {topic for topic, schema in schemas.items() if schema in SCENE_SCHEMAS}
+    assert {TOPIC_TF, TOPIC_ROBOT, TOPIC_TERRAIN, TOPIC_HEIGHTMAP} <= scene  # the recorder writes them all
+
     layout = json.loads((MCAP_CHECK.parents[1] / "layouts" / "hexpipe_layout.json").read_text())
     panels = layout["configById"]
 
@@ -317,12 +340,16 @@ def test_foxglove_layout_matches_the_topics() -> None:
     assert sorted(leaves(layout["layout"])) == sorted(panels)
     (three_d,) = (c for k, c in panels.items() if k.startswith("3D!"))
     assert three_d["followTf"] == "base_link"
-    assert all(three_d["topics"][t]["visible"] for t in (TOPIC_TF, TOPIC_TERRAIN, TOPIC_HEIGHTMAP))
+    assert three_d["followMode"] in ("follow-pose", "follow-position")  # Foxglove's modes that follow a frame
+    switched_on = {t for t, c in three_d["topics"].items() if c.get("visible")}
+    assert scene <= switched_on, f"not shown in the 3D panel: {sorted(scene - switched_on)}"
+    assert set(three_d["topics"]) <= set(schemas)  # no stale topic names
     assert three_d["topics"][TOPIC_HEIGHTMAP]["colorField"] == HEIGHT_FIELD
     (image,) = (c for k, c in panels.items() if k.startswith("Image!"))
-    assert image["imageMode"]["imageTopic"] == TOPIC_IMAGE
+    assert image["imageMode"]["imageTopic"] == TOPIC_IMAGE and schemas[TOPIC_IMAGE] == "foxglove.RawImage"
     plotted = {p["value"] for k, c in panels.items() if k.startswith("Plot!") for p in c["paths"]}
     assert plotted == {f"{TOPIC_CPG}.a", f"{TOPIC_CPG}.b", f"{TOPIC_CPG}.omega", f"{TOPIC_STEP}.distance"}
+    assert {p.split(".")[0] for p in plotted} <= set(schemas)
 
 
 @pytest.mark.slow

@@ -67,7 +67,7 @@ class LearnedPolicy:
         return self.policy.sensors
 
     def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
-        return self.policy.act(obs)
+        return self.policy.predict(obs)
 
 
 _policies: dict[tuple[str, bool | None], LoadedPolicy] = {}  # per process: each worker loads a policy once

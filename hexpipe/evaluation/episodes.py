@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from contextlib import ExitStack
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -18,6 +19,7 @@ from hexpipe.envs.rewards import cost_of_transport
 from hexpipe.evaluation.controllers import ControllerSpec, build, gait_label
 from hexpipe.evaluation.suite import Scenario
 
+StepHook = Callable[[HexapodEnv, float, dict[str, Any], bool], None]
 TRACE_COLUMNS = ("time", "distance", "a", "b", "omega")  # s, m, rad, rad, rad/s
 # Where the body counts as "near a block" for the lift statistics: from this far before a block's start (m; the
 # front feet reach about 0.45 m ahead of the base) until this far past its end (the rear legs are still on it).
@@ -71,9 +73,13 @@ def _trace_row(info: dict[str, Any]) -> list[float]:
     return [info["time"], info["distance"], *map(float, info["cpg"])]
 
 
-def run_episode(params: Params, job: EpisodeJob) -> EpisodeResult:
-    """Roll out one episode; the controller is deterministic, so (terrain, controller, seed) fixes the result."""
-    from hexpipe.evaluation.video import Mp4Writer
+def run_episode(params: Params, job: EpisodeJob, on_step: StepHook | None = None) -> EpisodeResult:
+    """Roll out one episode; the controller is deterministic, so (terrain, controller, seed) fixes the result.
+
+    on_step(env, reward, info, ended) runs after reset (reward 0) and after every step: `hexpipe play` streams
+    and paces the episode with it.
+    """
+    from hexpipe.evaluation.video import Mp4Writer, caption
     from hexpipe.recording.episode import EpisodeLog, episode_metadata
 
     if job.controller.policy_dir is not None:
@@ -99,7 +105,9 @@ def run_episode(params: Params, job: EpisodeJob) -> EpisodeResult:
                 log.step(0.0, info, force=True)
             if job.video is not None:
                 video = stack.enter_context(Mp4Writer(job.video, fps=params.sim.control_hz))
-                video.add(env.render())
+                video.add(env.render(), caption(env.terrain.name, info["time"], info["cpg"]))
+            if on_step is not None:
+                on_step(env, 0.0, info, False)
             trace = [_trace_row(info)]
             while True:
                 obs, reward, terminated, truncated, info = env.step(controller.act(obs))
@@ -108,7 +116,9 @@ def run_episode(params: Params, job: EpisodeJob) -> EpisodeResult:
                 if log is not None:
                     log.step(reward, info, force=ended)
                 if video is not None:
-                    video.add(env.render())
+                    video.add(env.render(), caption(env.terrain.name, info["time"], info["cpg"]))
+                if on_step is not None:
+                    on_step(env, float(reward), info, ended)
                 if ended:
                     break
         obstacles = _obstacles(env)

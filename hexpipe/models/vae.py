@@ -8,7 +8,6 @@ posterior mean is the terrain embedding PPO consumes. Everything the policy side
 from __future__ import annotations
 
 import json
-import os
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -18,6 +17,9 @@ import cv2
 import numpy as np
 import torch
 from torch import Tensor, nn
+
+from hexpipe.atomic import write_text
+from hexpipe.models.weights import WeightsError, load_state_dict, save_state_dict
 
 ENCODER_WEIGHTS = "encoder.pt"
 ENCODER_CONFIG = "encoder.json"
@@ -215,19 +217,11 @@ def encoder_config(model: ConvVAE, modality: str, input_shape: Sequence[int], **
     }
 
 
-def _atomic_write(path: Path, write: Any) -> None:
-    tmp = path.with_name(f".{path.name}.tmp")
-    write(tmp)
-    os.replace(tmp, path)
-
-
 def export_encoder(model: ConvVAE, out_dir: str | Path, config: dict[str, Any]) -> None:
-    """Write <out_dir>/encoder.pt (encoder state_dict only) and encoder.json, each via temp file + rename."""
+    """Write <out_dir>/encoder.pt (encoder state_dict only) and encoder.json, each atomically."""
     out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    state = {k: v.detach().cpu().clone() for k, v in model.encoder.state_dict().items()}
-    _atomic_write(out / ENCODER_WEIGHTS, lambda p: torch.save(state, p))
-    _atomic_write(out / ENCODER_CONFIG, lambda p: p.write_text(json.dumps(config, indent=2) + "\n"))
+    save_state_dict(model.encoder.state_dict(), out / ENCODER_WEIGHTS)
+    write_text(out / ENCODER_CONFIG, json.dumps(config, indent=2) + "\n")
 
 
 class FrozenEncoder:
@@ -273,8 +267,20 @@ def load_encoder(directory: str | Path) -> FrozenEncoder:
             int(config["latent_dim"]),
             tuple(config["channels"]),
         )
-        encoder.load_state_dict(torch.load(weights, map_location="cpu", weights_only=True))
-    except (json.JSONDecodeError, KeyError, TypeError, RuntimeError) as exc:
-        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        raise EncoderError(f"{directory}: encoder files are inconsistent or corrupt ({first})") from None
-    return FrozenEncoder(encoder, config)
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError, KeyError, TypeError, ValueError) as exc:
+        raise EncoderError(f"{cfg_path}: unreadable encoder config ({_first_line(exc)})") from None
+    try:
+        encoder.load_state_dict(load_state_dict(weights))  # weights only: a crafted file cannot run code
+    except WeightsError as exc:
+        raise EncoderError(str(exc)) from None
+    except RuntimeError as exc:  # missing keys or other shapes
+        raise EncoderError(f"{weights}: does not match {cfg_path} ({_first_line(exc)})") from None
+    try:
+        return FrozenEncoder(encoder, config)
+    except (KeyError, TypeError, ValueError) as exc:
+        raise EncoderError(f"{cfg_path}: unreadable encoder config ({_first_line(exc)})") from None
+
+
+def _first_line(exc: BaseException) -> str:
+    text = str(exc).strip()
+    return text.splitlines()[0] if text else type(exc).__name__

@@ -32,13 +32,19 @@ def _pitch_quaternion(pitch: float) -> np.ndarray:
 class EpisodeLog:
     """Writes one episode of `env` to `path`; call `step` after reset and after every env.step."""
 
-    def __init__(self, env: HexapodEnv, path: Path, metadata: dict[str, dict[str, str]], log_every: int = 1,
-                 sensors: tuple[str, ...] = SENSORS):
+    def __init__(self, env: HexapodEnv, path: Path | None, metadata: dict[str, dict[str, str]], log_every: int = 1,
+                 sensors: tuple[str, ...] = SENSORS, writer: EpisodeWriter | None = None, time_offset_ns: int = 0):
+        """Logs to a new file at `path`, or (path None) into `writer`, which it leaves open: a live stream of
+        several episodes keeps its channels. time_offset_ns shifts every stamp, so that stream's time increases."""
+        if (path is None) == (writer is None):
+            raise ValueError("EpisodeLog needs a path or an open writer, not both")
         self.env = env
         self.log_every = log_every
         self.sensors = sensors
         self.frames = 0
-        self.writer = EpisodeWriter(path, metadata)
+        self.time_offset_ns = time_offset_ns
+        self._owns_writer = writer is None
+        self.writer = EpisodeWriter(path, metadata) if writer is None else writer
         self._names = ["base_link", *env.robot_spec.link_names]
         cfg = env.sensor_cfg
         self._camera_tf = (
@@ -48,21 +54,30 @@ class EpisodeLog:
             np.array([*env.heightmap.origin, 0.0]), np.array([0.0, 0.0, 0.0, 1.0]),
             (env.heightmap.cell_x, env.heightmap.cell_y),
         )
-        self.writer.log_scene(0, env.terrain.boxes, env.terrain.heightfields)
-        self.writer.log_robot(0, robot_shapes(env.robot_spec))
+        self.log_static(time_offset_ns)
+
+    def log_static(self, t_ns: int) -> None:
+        """The terrain and the robot's geometry (logged once per file; a live stream repeats them for late viewers)."""
+        self.writer.log_scene(t_ns, self.env.terrain.boxes, self.env.terrain.heightfields)
+        self.writer.log_robot(t_ns, robot_shapes(self.env.robot_spec))
+
+    def now_ns(self) -> int:
+        """The stamp of the env's current step (ns): sim time, shifted by time_offset_ns."""
+        return self.time_offset_ns + 1 + round(self.env.steps * self.env.control_dt * 1e9)
 
     def __enter__(self) -> EpisodeLog:
         return self
 
     def __exit__(self, exc_type, exc, tb) -> None:
-        self.writer.__exit__(exc_type, exc, tb)
+        if self._owns_writer:
+            self.writer.__exit__(exc_type, exc, tb)
 
     def step(self, reward: float, info: dict[str, Any], force: bool = False) -> bool:
         """Log the env's current state if this is a kept step (every `log_every`-th, or `force`)."""
         env = self.env
         if not force and env.steps % self.log_every:
             return False
-        t_ns = 1 + round(env.steps * env.control_dt * 1e9)
+        t_ns = self.now_ns()
         poses = env.robot.link_poses()
         base_pos, base_quat = poses[0]
         transforms = [(WORLD_FRAME, name, pos, quat) for name, (pos, quat) in zip(self._names, poses, strict=True)]
@@ -94,7 +109,8 @@ class EpisodeLog:
         return True
 
     def close(self) -> None:
-        self.writer.close()
+        if self._owns_writer:
+            self.writer.close()
 
 
 def episode_metadata(env: HexapodEnv, seed: int, params_json: str, **episode: Any) -> dict[str, dict[str, str]]:

@@ -125,25 +125,37 @@ class EpisodeWriter:
     an unclosed writer leaves just `<path>.tmp` behind.
     """
 
-    def __init__(self, path: Path, metadata: Mapping[str, Mapping[str, str]]) -> None:
-        self.path = Path(path)
-        self._tmp = self.path.with_name(self.path.name + ".tmp")
+    def __init__(
+        self, path: Path | None, metadata: Mapping[str, Mapping[str, str]], context: foxglove.Context | None = None
+    ) -> None:
+        """path: the MCAP file, or None to log only to `context`'s other sinks (e.g. a live WebSocket server).
+
+        context: the foxglove Context to create the channels on (default: a fresh one, so one file per writer);
+        its sinks must exist already, since a context only delivers to sinks present when a channel is made.
+        """
+        if path is None and context is None:
+            raise ValueError("EpisodeWriter needs a path, a context with a sink, or both")
+        self.path = None if path is None else Path(path)
         _check_metadata(metadata)
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        self._context = foxglove.Context()
+        self._context = context or foxglove.Context()
         self._closed = False
         self._last_step_ns: int | None = None
         self._json: dict[str, foxglove.Channel] = {}  # made on first use; schema from that message
         self._grid_fields = [
             PackedElementField(name=HEIGHT_FIELD, offset=0, type=PackedElementFieldNumericType.Float32)
         ]
-        # The writer must exist before the channels: a context only delivers to sinks present at creation.
-        self._writer = foxglove.open_mcap(
-            self._tmp, allow_overwrite=True, context=self._context, writer_options=WRITE_OPTIONS
-        )
+        self._writer = None
+        if self.path is not None:
+            self._tmp = self.path.with_name(self.path.name + ".tmp")
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            # The writer must exist before the channels: a context only delivers to sinks present at creation.
+            self._writer = foxglove.open_mcap(
+                self._tmp, allow_overwrite=True, context=self._context, writer_options=WRITE_OPTIONS
+            )
         try:
             for name, record in metadata.items():
-                self._writer.write_metadata(name, dict(record))
+                if self._writer is not None:
+                    self._writer.write_metadata(name, dict(record))
             self._scene = SceneUpdateChannel(TOPIC_TERRAIN, context=self._context)
             self._robot = SceneUpdateChannel(TOPIC_ROBOT, context=self._context)
             self._tf = FrameTransformsChannel(TOPIC_TF, context=self._context)
@@ -258,12 +270,14 @@ class EpisodeWriter:
         self._closed = True
         try:
             self._close_channels()
-            self._writer.close()
-            with open(self._tmp, "rb") as f:
-                os.fsync(f.fileno())
-            os.replace(self._tmp, self.path)
+            if self._writer is not None:
+                self._writer.close()
+                with open(self._tmp, "rb") as f:
+                    os.fsync(f.fileno())
+                os.replace(self._tmp, self.path)
         except BaseException:
-            self._tmp.unlink(missing_ok=True)
+            if self._writer is not None:
+                self._tmp.unlink(missing_ok=True)
             raise
 
     def _abort(self) -> None:
@@ -273,9 +287,11 @@ class EpisodeWriter:
         self._closed = True
         try:
             self._close_channels()
-            self._writer.close()
+            if self._writer is not None:
+                self._writer.close()
         finally:
-            self._tmp.unlink(missing_ok=True)
+            if self._writer is not None:
+                self._tmp.unlink(missing_ok=True)
 
     def _close_channels(self) -> None:
         for name in ("_scene", "_robot", "_tf", "_image", "_grid"):

@@ -1,28 +1,31 @@
-"""Loading a trained PPO policy for evaluation, with its inputs rebuilt exactly as in training.
+"""Loading a trained PPO policy to run it, with its inputs rebuilt exactly as in training; no pickle is read.
 
-train-ppo writes `<dir>/policy/model.zip`, `<dir>/policy/vecnormalize.pkl` and `<dir>/policy.json`. At evaluation
-the policy must see the same vector it was trained on: [body, cpg, embedding] (the `TerrainFeatures` layout),
-normalised with the frozen training statistics. Everything that would silently change that vector (another height
-map size or extent, a retrained VAE of another latent size, a blind policy where a seeing one is expected) is
-refused up front with a one-line `PolicyError` saying what was expected and what was found.
+train-ppo writes `<dir>/policy.json` and, in `<dir>/policy/`, the weights-only files `weights.pt` and
+`weights.json` (see `hexpipe.rl.inference`) beside SB3's `model.zip` and `vecnormalize.pkl` (kept only for
+`--resume`). At run time the policy must see the same vector it was trained on: [body, cpg, embedding] (the
+`TerrainFeatures` layout), normalised with the frozen training statistics. Everything that would silently change
+that vector (another height map size or extent, a retrained VAE of another latent size, a blind policy where a
+seeing one is expected) is refused up front with a one-line `PolicyError` saying what was expected and found.
+
+`hexpipe.load_policy(dir)` is this module's `load_policy` without params: the env settings then come from
+policy.json (those the policy was trained with).
 """
 
 from __future__ import annotations
 
 import json
-import pickle
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from hexpipe.config import Params
-from hexpipe.rl.checkpoint import MODEL, NORMALISATION
+from hexpipe.config import CpgConfig, Params, SensorConfig, SimConfig
 from hexpipe.rl.features import PROPRIOCEPTIVE_KEYS, Encoder
+from hexpipe.rl.inference import WEIGHTS, WEIGHTS_CONFIG, ObservationNormaliser, load_weights
 from hexpipe.rl.train import POLICY_CONFIG
 
-POLICY_SUBDIR = "policy"  # train.py saves model.zip and vecnormalize.pkl here
+POLICY_SUBDIR = "policy"  # train.py saves the policy files here
 _RETRAIN = "run `hexpipe train-ppo`"
 
 # Sensor settings that change what a modality's frames mean (not only their shape).
@@ -38,15 +41,19 @@ class PolicyError(ValueError):
 
 @dataclass
 class LoadedPolicy:
-    """A frozen PPO policy: raw env observations (Dict, one env) in, deterministic action (3,) out."""
+    """A frozen PPO policy: one raw env observation (the Dict from reset/step) in, deterministic action (3,) out.
+
+    `env_kwargs` are the HexapodEnv settings it expects (sim, cpg, sensors, and task with the policy's sensors):
+    `gymnasium.make("hexpipe/Hexapod-v0", terrain=..., **policy.env_kwargs)`.
+    """
 
     name: str  # e.g. "ppo+heightmap-vae8" or "ppo-blind"
     directory: Path
     config: dict[str, Any]  # policy.json
-    model: Any  # stable_baselines3 PPO
-    normaliser: Any  # VecNormalize with training=False, used only for normalize_obs
+    actor: Any  # stable_baselines3 ActorCriticPolicy, eval mode, rebuilt from weights.pt
+    normaliser: ObservationNormaliser | None  # the frozen VecNormalize statistics; None if trained without
     encoder: Encoder | None
-    heightmap_shape: tuple[int, int]
+    params: Params  # the settings the env must be built with
     drift: list[str] = field(default_factory=list)  # sim/cpg settings that differ from training (warnings)
 
     @property
@@ -58,41 +65,51 @@ class LoadedPolicy:
         """The observation sensors the env must provide (none for a blind policy)."""
         return () if self.encoder is None else (self.encoder.modality,)
 
+    @property
+    def env_kwargs(self) -> dict[str, Any]:
+        p = self.params
+        return {"sim": p.sim, "cpg": p.cpg, "sensors": p.sensors,
+                "task": p.task.model_copy(update={"sensors": self.sensors})}
+
     def features(self, obs: dict[str, np.ndarray]) -> np.ndarray:
         """One observation -> (1, observation_dim) float32, laid out as `TerrainFeatures.features`."""
         parts = [np.asarray(obs[k], dtype=np.float32).reshape(1, -1) for k in PROPRIOCEPTIVE_KEYS]
         if self.encoder is not None:
             sensor = np.asarray(obs[self.encoder.modality])[None]
             if self.encoder.modality == "heightmap":
-                sensor = sensor.reshape(1, *self.heightmap_shape)
+                sensor = sensor.reshape(1, self.params.sensors.heightmap_rows, self.params.sensors.heightmap_cols)
             parts.append(self.encoder.encode(sensor).astype(np.float32))
         return np.concatenate(parts, axis=1)
 
-    def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
-        """Deterministic action in [-1, 1]^3 for one raw observation (normalised as in training)."""
-        x = self.normaliser.normalize_obs(self.features(obs))
-        action, _ = self.model.predict(x, deterministic=True)
+    def predict(self, obs: dict[str, np.ndarray]) -> np.ndarray:
+        """Deterministic action in [-1, 1]^3 (d²/dt² of a, b, omega, scaled) for one raw observation."""
+        x = self.features(obs)
+        if self.normaliser is not None:
+            x = self.normaliser(x)
+        action, _ = self.actor.predict(x, deterministic=True)
         return np.asarray(action, dtype=np.float32).reshape(-1)
 
 
 def load_policy(
-    policy_dir: str | Path, params: Params, expect_blind: bool | None = None
+    policy_dir: str | Path, params: Params | None = None, expect_blind: bool | None = None
 ) -> LoadedPolicy:
-    """Load and check the policy trained into `policy_dir` (train-ppo's ppo.out_dir) against `params` now.
+    """Load and check the policy trained into `policy_dir` (train-ppo's ppo.out_dir).
 
-    expect_blind: True/False refuses a policy that is not / is blind (None accepts either).
+    params: the settings to run it under (checked against training); None: those it was trained with
+    (policy.json). expect_blind: True/False refuses a policy that is not / is blind (None accepts either).
     """
-    from stable_baselines3 import PPO
-
     directory = Path(policy_dir)
     if not directory.is_dir():
         raise PolicyError(f"no trained policy at {directory}: folder not found ({_RETRAIN} first)")
     config_path = directory / POLICY_CONFIG
-    model_path, norm_path = directory / POLICY_SUBDIR / MODEL, directory / POLICY_SUBDIR / NORMALISATION
-    for path in (config_path, model_path, norm_path):
+    weights_dir = directory / POLICY_SUBDIR
+    for path in (config_path, weights_dir / WEIGHTS, weights_dir / WEIGHTS_CONFIG):
         if not path.is_file():
             raise PolicyError(f"incomplete policy in {directory}: {path} not found ({_RETRAIN})")
     config = _read_config(config_path)
+    given = params is not None
+    if params is None:
+        params = _training_params(config, config_path)
     blind = bool(config["blind"])
     if expect_blind is not None and blind != expect_blind:
         want, got = ("blind", "one that sees the terrain") if expect_blind else ("seeing", "a blind one")
@@ -113,29 +130,40 @@ def load_policy(
             f"encoder now produce {produced}; evaluate with the training settings or {_RETRAIN}"
         )
 
+    from hexpipe.models.weights import WeightsError
+
     try:
-        model = PPO.load(model_path, device="cpu")
-        with norm_path.open("rb") as f:
-            normaliser = pickle.load(f)
-    except Exception as exc:  # zip, pickle and torch errors alike
-        raise PolicyError(f"{directory}: cannot load the policy files ({_one_line(exc)}); {_RETRAIN}") from None
-    model_dim = int(np.prod(model.observation_space.shape))
-    norm_dim = int(np.prod(normaliser.obs_rms.mean.shape))
-    if model_dim != dim or norm_dim != dim:
+        actor, normaliser, weights = load_weights(weights_dir)
+    except WeightsError as exc:
+        raise PolicyError(f"{directory}: cannot load the policy weights: {exc} ({_RETRAIN})") from None
+    if weights["observation_dim"] != dim:
         raise PolicyError(
-            f"{directory}: expected observation_dim={dim} (policy.json), found {model_dim} in {MODEL} and "
-            f"{norm_dim} in {NORMALISATION}; the files come from different runs ({_RETRAIN})"
+            f"{directory}: expected observation_dim={dim} (policy.json), found {weights['observation_dim']} in "
+            f"{WEIGHTS_CONFIG}; the files come from different runs ({_RETRAIN})"
         )
-    normaliser.training = False  # statistics stay frozen
-    normaliser.norm_reward = False
 
     latent = "" if encoder is None else f"+{encoder.modality}-vae{encoder.latent_dim}"
     return LoadedPolicy(
         name="ppo-blind" if encoder is None else f"ppo{latent}",
-        directory=directory, config=config, model=model, normaliser=normaliser, encoder=encoder,
-        heightmap_shape=(params.sensors.heightmap_rows, params.sensors.heightmap_cols),
-        drift=_drift(config, params),
+        directory=directory, config=config, actor=actor, normaliser=normaliser, encoder=encoder, params=params,
+        drift=_drift(config, params) if given else [],
     )
+
+
+def _training_params(config: dict[str, Any], path: Path) -> Params:
+    """Params with the sim, cpg and sensor settings recorded in policy.json (other sections: defaults)."""
+    from pydantic import ValidationError
+
+    sections = {}
+    for name, model in (("sim", SimConfig), ("cpg", CpgConfig), ("sensors", SensorConfig)):
+        recorded = config.get(name)
+        if not isinstance(recorded, dict):
+            raise PolicyError(f"{path}: policy config lacks the {name} settings; pass params or {_RETRAIN}")
+        sections[name] = {k: v for k, v in recorded.items() if k in model.model_fields}
+    try:
+        return Params.model_validate(sections)
+    except ValidationError as exc:
+        raise PolicyError(f"{path}: recorded settings are invalid ({exc.errors()[0]['msg']})") from None
 
 
 def _read_config(path: Path) -> dict[str, Any]:

@@ -19,6 +19,7 @@ from hexpipe.envs.hexapod import HexapodEnv
 from hexpipe.rl.checkpoint import MODEL, NORMALISATION, latest_checkpoint, save_checkpoint, save_policy
 from hexpipe.rl.curriculum import Curriculum, CurriculumStats
 from hexpipe.rl.features import TerrainFeatures
+from hexpipe.rl.inference import export_weights
 
 POLICY_CONFIG = "policy.json"
 
@@ -172,6 +173,7 @@ def train_ppo(params: Params, resume: bool = False, show_progress: bool = True) 
     train_rate = (model.num_timesteps - start_steps) / max(time.perf_counter() - started, 1e-9)
     save_checkpoint(model, checkpoints)
     save_policy(model, out_dir / "policy")
+    export_weights(model, out_dir / "policy")  # what evaluate and play load: tensors and JSON, no pickle
     config = policy_config(params, encoder, int(venv.observation_space.shape[0]))
     tmp = out_dir / (POLICY_CONFIG + ".tmp")
     tmp.write_text(json.dumps(config, indent=2) + "\n")
