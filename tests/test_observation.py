@@ -107,7 +107,7 @@ def test_a_policy_trained_without_position_loads_only_with_that_setting(tmp_path
     assert policy.config["observation_dim"] == 17 and policy.config["observe_position"] is False
     env = HexapodEnv("single_block", task=params.task.model_copy(update={"sensors": ()}))
     obs, _ = env.reset(seed=0)
-    assert policy.act(obs).shape == (3,)
+    assert policy.predict(obs).shape == (3,)
     env.close()
     paper = load_params(root / "params.yaml", tiny)
     with pytest.raises(PolicyError, match=r"task\.observe_position=false, params now have true"):
