@@ -12,8 +12,9 @@ import math
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
-import yaml
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+
+from hexpipe.validation import bool_misused, format_validation_error, parse_yaml, read_yaml, show
 
 Triple = tuple[float, float, float]
 PositiveInt = Annotated[int, Field(ge=1)]
@@ -26,7 +27,18 @@ class ConfigError(ValueError):
 
 
 class _Section(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    """Every params section: unknown keys, inf/NaN and booleans given for numbers are refused."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+
+    @field_validator("*", mode="before")
+    @classmethod
+    def _no_bool_for_number(cls, value: Any, info: Any) -> Any:
+        """YAML `true` is not the number 1: refuse a bool (alone or in a list) unless the field is a bool."""
+        field = cls.model_fields.get(info.field_name)
+        if field is not None and bool_misused(field.annotation, value):
+            raise ValueError(f"expected a number or text, not a boolean (got {show(value)})")
+        return value
 
 
 class SimConfig(_Section):
@@ -109,7 +121,6 @@ class RandomizationConfig(_Section):
 class TaskConfig(_Section):
     """Episode rules: the paper's 3 m goal, stuck and fall detection, time limit."""
 
-    terrain: str = "single_block"  # named scenario or path to a terrain YAML
     sensors: tuple[Sensor, ...] = ("heightmap",)
     goal_distance: PositiveFloat = 3.0  # m of forward progress that ends an episode with success
     stuck_window: PositiveFloat = 4.0  # s over which progress is measured
@@ -150,6 +161,14 @@ class VaeConfig(_Section):
     data_dir: str = "data/rollouts"
     out_dir: str = "data/models/vae"
     report_dir: str = "reports/vae"
+
+    @field_validator("image_size")
+    @classmethod
+    def _image_size_fits(cls, size: int) -> int:
+        """Checked here, not after minutes of loading data: the encoder halves the image 4 times."""
+        if size < 16 or size % 16 or size > 512:
+            raise ValueError(f"must be a multiple of 16 (4 stride-2 layers) from 16 to 512, got {size}")
+        return size
 
 
 class PpoConfig(_Section):
@@ -248,47 +267,19 @@ def parse_override(text: str) -> tuple[str, Any]:
     key, sep, raw = text.partition("=")
     if not sep or not key.strip():
         raise ConfigError(f"--set {text!r}: expected section.key=value")
-    try:
-        value = yaml.safe_load(raw) if raw.strip() else ""
-    except yaml.YAMLError as exc:
-        raise ConfigError(f"--set {key}: value {raw!r} is not valid YAML ({exc.__class__.__name__})") from None
+    value = parse_yaml(raw, f"--set {key}", ConfigError) if raw.strip() else ""
     return key.strip(), value
 
 
-def _allowed_keys(model: type[BaseModel], loc: tuple[Any, ...]) -> list[str]:
-    for part in loc[:-1]:
-        field = model.model_fields.get(str(part))
-        annotation = getattr(field, "annotation", None)
-        if not (isinstance(annotation, type) and issubclass(annotation, BaseModel)):
-            return []
-        model = annotation
-    return sorted(model.model_fields)
-
-
-def format_validation_error(exc: ValidationError, model: type[BaseModel], source: str) -> str:
-    """One line naming the first bad key, what was given and what is allowed."""
-    err = exc.errors()[0]
-    loc = tuple(err["loc"])
-    key = ".".join(str(p) for p in loc) or "(top level)"
-    if err["type"] == "extra_forbidden":
-        allowed = ", ".join(_allowed_keys(model, loc))
-        return f"{source}: unknown key '{key}'; allowed here: {allowed}"
-    given = err.get("input")
-    shown = "" if isinstance(given, dict) else f" (got {given!r})"
-    return f"{source}: {key}: {err['msg']}{shown}"
-
-
 def load_params(path: str | Path = "params.yaml", overrides: list[str] | tuple[str, ...] = ()) -> Params:
-    """Read params.yaml (missing file -> defaults only if path is None), apply --set overrides, validate."""
+    """Read params.yaml, apply --set overrides, validate. An empty file is refused: it would silently mean the
+    defaults, which is never what a user who points at a file wants (an empty mapping, `{}`, says so on purpose)."""
     path = Path(path)
     if not path.is_file():
         raise ConfigError(f"params file not found: {path}")
-    try:
-        tree = yaml.safe_load(path.read_text()) or {}
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f" line {mark.line + 1}" if mark else ""
-        raise ConfigError(f"{path}:{where}: not valid YAML") from None
+    tree = read_yaml(path, ConfigError)
+    if tree is None:
+        raise ConfigError(f"{path}: the file is empty; write the sections to change (or `{{}}` for all defaults)")
     if not isinstance(tree, dict):
         raise ConfigError(f"{path}: top level must be a mapping of sections")
     for text in overrides:

@@ -37,7 +37,6 @@ from pathlib import Path
 from typing import Annotated, Any
 
 import numpy as np
-import yaml
 from pydantic import (
     BaseModel,
     BeforeValidator,
@@ -48,6 +47,8 @@ from pydantic import (
     ValidationError,
     model_validator,
 )
+
+from hexpipe.validation import format_validation_error, read_yaml, show
 
 Vec2 = tuple[float, float]
 Vec3 = tuple[float, float, float]
@@ -484,7 +485,7 @@ def _numbers(n: int, positive: bool = False, unit: bool = False) -> BeforeValida
         if ok and unit:
             ok = all(0 <= v <= 1 for v in value)
         if not ok:
-            raise ValueError(f"expected {n} {kind}, got {_show(value)}")
+            raise ValueError(f"expected {n} {kind}, got {show(value)}")
         return tuple(float(v) for v in value)
 
     return BeforeValidator(check)
@@ -503,14 +504,10 @@ def _range(integer: bool = False, positive: bool = False, strict: bool = False) 
         if ok:
             ok = value[0] < value[1] if strict else value[0] <= value[1]
         if not ok:
-            raise ValueError(f"expected [low, high] of {kind} with low {order} high, got {_show(value)}")
+            raise ValueError(f"expected [low, high] of {kind} with low {order} high, got {show(value)}")
         return (int(value[0]), int(value[1])) if integer else (float(value[0]), float(value[1]))
 
     return BeforeValidator(check)
-
-
-def _show(value: Any) -> str:
-    return repr(list(value)) if isinstance(value, tuple) else repr(value)
 
 
 # Strict scalars: YAML strings such as "0.1" or booleans are errors, ints are fine where floats are expected.
@@ -645,43 +642,7 @@ SCENARIOS: dict[str, TerrainRecipe] = {
 }
 
 
-_SECTION_MODELS: dict[str, type[BaseModel]] = {
-    "rough": RoughSpec,
-    "stairs": StairsSpec,
-    "random_blocks": RandomBlocksSpec,
-    "box": BoxSpec,
-    "block": BlockSpec,
-}
-
-
-def _format_error(exc: ValidationError, source: str) -> str:
-    """One line: file, entry path like boxes[1].size, and what is wrong."""
-    err = exc.errors()[0]
-    parts: list[str] = []
-    model: type[BaseModel] = TerrainRecipe
-    for i, part in enumerate(err["loc"]):
-        if isinstance(part, int):
-            parts[-1] += f"[{part}]"
-        elif i > 0 and isinstance(err["loc"][i - 1], int) and part in ("box", "block"):
-            model = _SECTION_MODELS[part]  # the discriminator's tag, not a key the user wrote
-        else:
-            if part in _SECTION_MODELS and not parts:
-                model = _SECTION_MODELS[part]
-            parts.append(str(part))
-    key = ".".join(parts)
-    if err["type"] == "extra_forbidden":
-        allowed = ", ".join(sorted(model.model_fields))
-        return f"{source}: unknown key '{key}'; allowed here: {allowed}"
-    where = f"{key}: " if key else ""
-    if err["type"] == "value_error":
-        return f"{source}: {where}{err['ctx']['error']}"
-    given = err.get("input")
-    if err["type"] in ("model_type", "dict_type"):
-        return f"{source}: {where}expected a mapping of keys, got {_show(given)}"
-    if err["type"] in ("tuple_type", "list_type"):
-        return f"{source}: {where}expected a list, got {_show(given)}"
-    shown = "" if isinstance(given, dict) or err["type"] == "missing" else f" (got {_show(given)})"
-    return f"{source}: {where}{err['msg']}{shown}"
+_TAGS: dict[str, type[BaseModel]] = {"box": BoxSpec, "block": BlockSpec}  # tags of the boxes union
 
 
 def parse_recipe(data: Any, source: str = "terrain", default_name: str = "terrain") -> TerrainRecipe:
@@ -693,7 +654,7 @@ def parse_recipe(data: Any, source: str = "terrain", default_name: str = "terrai
     try:
         return TerrainRecipe.model_validate(data)
     except ValidationError as exc:
-        raise TerrainError(_format_error(exc, source)) from None
+        raise TerrainError(format_validation_error(exc, TerrainRecipe, source, tags=_TAGS)) from None
 
 
 def load_terrain(name_or_path: str | Path) -> TerrainRecipe:
@@ -707,15 +668,7 @@ def load_terrain(name_or_path: str | Path) -> TerrainRecipe:
         raise TerrainError(f"unknown terrain '{text}'; valid names: {names} (or a path to a .yaml file)")
     if not path.is_file():
         raise TerrainError(f"{text}: terrain file not found")
-    try:
-        data = yaml.safe_load(path.read_text())
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f" line {mark.line + 1}:" if mark else ""
-        problem = " ".join(str(getattr(exc, "problem", None) or exc).split())
-        raise TerrainError(f"{text}:{where} not valid YAML ({problem})") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise TerrainError(f"{text}: cannot read ({exc.__class__.__name__})") from None
+    data = read_yaml(path, TerrainError, source=text)
     return parse_recipe(data, source=text, default_name=path.stem)
 
 
