@@ -34,12 +34,14 @@ def _user_errors() -> tuple[type[Exception], ...]:
     from hexpipe.evaluation.video import VideoError
     from hexpipe.models.train_vae import VaeDataError
     from hexpipe.models.vae import EncoderError
+    from hexpipe.paths import OutputError
     from hexpipe.recording.reader import RecordingError
     from hexpipe.rl.policy import PolicyError
     from hexpipe.sim.terrain import TerrainError
 
+    # OSError last: an unreadable input or a full disk is the user's to fix, and its message names the path
     return (ConfigError, FileNotFoundError, TerrainError, EncoderError, VaeDataError, RecordingError, PolicyError,
-            VideoError)
+            VideoError, OutputError, OSError)
 
 
 @contextmanager
@@ -47,7 +49,7 @@ def user_errors() -> Iterator[None]:
     try:
         yield
     except _user_errors() as exc:
-        console.print(f"[red]error:[/red] {exc}", highlight=False, soft_wrap=True)
+        console.print(f"[red]error:[/red] {' '.join(str(exc).split())}", highlight=False, soft_wrap=True)
         raise typer.Exit(2) from None
     except KeyboardInterrupt:
         console.print("[yellow]interrupted[/yellow]: completed outputs are kept; rerun to finish")
@@ -64,6 +66,14 @@ def load(params: Path, overrides: list[str] | None) -> Params:
         return load_params(params, overrides or [])
 
 
+def writable(*folders: str | Path) -> None:
+    """Refuse to start a stage whose output folders cannot be written (one line, before any work)."""
+    from hexpipe.paths import check_writable
+
+    with user_errors():
+        check_writable(*folders)
+
+
 @app.command()
 def collect(
     params: ParamsOpt = Path("params.yaml"),
@@ -76,6 +86,7 @@ def collect(
     from hexpipe.collect import collect as run_collect
 
     cfg = load(params, set_)
+    writable(cfg.collect.out_dir, report.parent)
     with Progress("[bold]collect", BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(), console=console) as bar:
         task = bar.add_task("episodes", total=cfg.collect.episodes)
         with user_errors():
@@ -95,6 +106,7 @@ def train_vae_cmd(params: ParamsOpt = Path("params.yaml"), set_: SetOpt = None) 
     from hexpipe.models.train_vae import train_vae
 
     cfg = load(params, set_)
+    writable(cfg.vae.out_dir, cfg.vae.report_dir)
     with user_errors():
         metrics = train_vae(cfg.vae)
     shown = {k: round(v, 4) for k, v in metrics.items() if k in ("val/loss", "probe_accuracy", "probe_baseline")}
@@ -111,6 +123,7 @@ def train_ppo_cmd(
     from hexpipe.rl.train import train_ppo
 
     cfg = load(params, set_)
+    writable(cfg.ppo.out_dir, cfg.ppo.report_dir)
     with user_errors():
         metrics = train_ppo(cfg, resume=resume)
     console.print(
@@ -136,6 +149,7 @@ def evaluate(
     from hexpipe.summary import write_summary
 
     cfg = load(params, set_)
+    writable(cfg.eval.out_dir, cfg.eval.report_dir, *(["reports"] if write_page else []))
     with user_errors():
         summary_text = run_evaluate(cfg, extra_terrains=tuple(terrain or ()))
     console.print(summary_text)

@@ -22,6 +22,7 @@ import numpy as np
 
 from hexpipe.config import Params, params_hash
 from hexpipe.envs.hexapod import HexapodEnv
+from hexpipe.paths import safe_name
 
 MANIFEST = "manifest.json"
 TIMINGS = ("seconds", "env_seconds")  # wall-clock figures: reported, never in the (reproducible) manifest
@@ -35,7 +36,7 @@ class EpisodePlan:
 
     @property
     def file(self) -> str:
-        return f"ep_{self.index:05d}_{Path(self.terrain).stem}.mcap"
+        return f"ep_{self.index:05d}_{safe_name(Path(self.terrain).stem, fallback='terrain')}.mcap"
 
 
 def plan_episodes(params: Params) -> list[EpisodePlan]:

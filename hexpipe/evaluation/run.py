@@ -38,6 +38,7 @@ from hexpipe.evaluation.episodes import TRACE_COLUMNS, EpisodeJob, EpisodeResult
 from hexpipe.evaluation.metrics import Table, rank_gaits, summarise
 from hexpipe.evaluation.report import ReportInputs, write_reports
 from hexpipe.evaluation.suite import Scenario, evaluation_suite, training_suite
+from hexpipe.paths import inside
 
 WORKERS = 2  # worker processes, one env each
 GRID_SEEDS = 3  # episodes per gait and training terrain in the best_fixed search
@@ -139,11 +140,11 @@ def command_line(params: Params, extra_terrains: Iterable[str]) -> str:
 
 
 def _remove_stale(out_dir: Path, suite: list[Scenario], written: set[Path]) -> None:
-    """Drop this suite's recordings that an earlier run left and this one did not rewrite."""
+    """Drop this suite's recordings that an earlier run left and this one did not rewrite (only inside out_dir)."""
     for scenario in suite:
         old = [*(out_dir / scenario.stem).glob("ep_*.mcap"), out_dir / f"{scenario.stem}.mp4"]
         for path in old:
-            if path.is_file() and path not in written:
+            if path.is_file() and path not in written and inside(path, out_dir):
                 path.unlink()
 
 

@@ -59,7 +59,12 @@ SOIL: Rgba = (0.45, 0.4, 0.3, 1.0)  # height fields
 GREY: Rgba = (0.6, 0.6, 0.6, 1.0)  # ground plane
 GROUND_HALF_EXTENT = 20.0  # the ground plane is a 40 m x 40 m static box centred on the origin (m)
 GROUND_THICKNESS = 0.1  # (m); its top is z = 0
-MAX_GRID_NODES = 4_000_000  # refuse height fields larger than this (memory and build time)
+# Bounds on what a terrain file may ask for, so that a typo gives an error instead of a hang or an OOM kill.
+MAX_GRID_NODES = 250_000  # height-field nodes: PyBullet builds 1M nodes in ~6 s, 4M in ~40 s (at every reset)
+MAX_NOISE_WORK = 200_000_000  # rough: padded noise nodes x Gaussian kernel taps (~1 s of NumPy, ~32 MB)
+MAX_BOXES = 200  # boxes of one terrain, all parts together: each step's height map tests every box
+MAX_VALUE = 1000.0  # every number of a terrain file (m, rad or friction) within +-this: PyBullet needs sane sizes
+MAX_RANDOM_TRIES = 64  # random_blocks: depth draws per block count before trying one block fewer
 
 
 class TerrainError(ValueError):
@@ -449,8 +454,10 @@ def random_blocks(
     """
     n = int(rng.integers(count[0], count[1] + 1))
     span = face[1] - face[0]
+    if depth[0] + gap > 0:  # no more blocks than fit at their shortest: keeps the loop below short
+        n = min(n, 1 + math.floor(max(span, 0.0) / (depth[0] + gap)))
     while n > 0:
-        for _ in range(64):
+        for _ in range(MAX_RANDOM_TRIES):
             depths = rng.uniform(depth[0], depth[1], n)
             slack = span - float(depths[:-1].sum()) - gap * (n - 1)  # free room for the faces
             if slack >= 0:
@@ -472,11 +479,12 @@ def random_blocks(
 
 
 def _is_number(v: Any) -> bool:
-    return isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
+    return isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v) and abs(v) <= MAX_VALUE
 
 
 def _numbers(n: int, positive: bool = False, unit: bool = False) -> BeforeValidator:
     kind = "positive numbers" if positive else "numbers in [0, 1]" if unit else "numbers"
+    kind += f" (|x| <= {MAX_VALUE:g})" if not unit else ""
 
     def check(value: Any) -> tuple[float, ...]:
         ok = isinstance(value, list | tuple) and len(value) == n and all(_is_number(v) for v in value)
@@ -491,14 +499,19 @@ def _numbers(n: int, positive: bool = False, unit: bool = False) -> BeforeValida
     return BeforeValidator(check)
 
 
-def _range(integer: bool = False, positive: bool = False, strict: bool = False) -> BeforeValidator:
+def _range(
+    integer: bool = False, positive: bool = False, strict: bool = False, upper: float = math.inf
+) -> BeforeValidator:
     kind = "integers >= 0" if integer else "positive numbers" if positive else "numbers"
+    kind += f" <= {upper:g}" if upper < math.inf else f" (|x| <= {MAX_VALUE:g})"
     order = "<" if strict else "<="
 
     def check(value: Any) -> tuple[float, float] | tuple[int, int]:
         ok = isinstance(value, list | tuple) and len(value) == 2 and all(_is_number(v) for v in value)
         if ok and integer:
             ok = all(isinstance(v, int) and v >= 0 for v in value)
+        if ok:
+            ok = all(v <= upper for v in value)
         if ok and positive:
             ok = all(v > 0 for v in value)
         if ok:
@@ -511,9 +524,9 @@ def _range(integer: bool = False, positive: bool = False, strict: bool = False) 
 
 
 # Strict scalars: YAML strings such as "0.1" or booleans are errors, ints are fine where floats are expected.
-Num = Annotated[float, Field(strict=True, allow_inf_nan=False)]
-Pos = Annotated[float, Field(strict=True, gt=0, allow_inf_nan=False)]
-NonNeg = Annotated[float, Field(strict=True, ge=0, allow_inf_nan=False)]
+Num = Annotated[float, Field(strict=True, ge=-MAX_VALUE, le=MAX_VALUE, allow_inf_nan=False)]
+Pos = Annotated[float, Field(strict=True, gt=0, le=MAX_VALUE, allow_inf_nan=False)]
+NonNeg = Annotated[float, Field(strict=True, ge=0, le=MAX_VALUE, allow_inf_nan=False)]
 
 
 class _Spec(BaseModel):
@@ -558,7 +571,16 @@ class RoughSpec(_Spec):
         if min(nx, ny) < 2:
             raise ValueError(f"cell {self.cell} is larger than the field; need at least 2 nodes per axis")
         if nx * ny > MAX_GRID_NODES:
-            raise ValueError(f"cell {self.cell} gives {nx}x{ny} nodes; at most {MAX_GRID_NODES} allowed")
+            raise ValueError(
+                f"cell {self.cell} gives {nx}x{ny} nodes; at most {MAX_GRID_NODES} allowed (raise cell or shrink x, y)"
+            )
+        r = max(1, math.ceil(3 * self.smoothing / self.cell))  # the noise kernel's radius in cells (_smooth_noise)
+        work = (nx + 2 * r) * (ny + 2 * r) * (2 * r + 1)
+        if work > MAX_NOISE_WORK:
+            raise ValueError(
+                f"smoothing {self.smoothing} m is {self.smoothing / self.cell:.0f} cells of {self.cell} m: the noise "
+                f"filter would need {work:.2g} operations (at most {MAX_NOISE_WORK:.0e}); lower smoothing or raise cell"
+            )
         return self
 
 
@@ -576,7 +598,7 @@ class StairsSpec(_Spec):
 class RandomBlocksSpec(_Spec):
     """Domain randomisation; see `random_blocks`."""
 
-    count: Annotated[tuple[int, int], _range(integer=True)] = (1, 3)
+    count: Annotated[tuple[int, int], _range(integer=True, upper=MAX_BOXES)] = (1, 3)
     height: Annotated[Vec2, _range(positive=True)] = (0.06, 0.12)
     depth: Annotated[Vec2, _range(positive=True)] = (0.2, 1.0)
     face: Annotated[Vec2, _range()] = (0.8, 2.6)
@@ -603,6 +625,14 @@ class TerrainRecipe(_Spec):
     rough: RoughSpec | None = None
     stairs: StairsSpec | None = None
     random_blocks: RandomBlocksSpec | None = None
+
+    @model_validator(mode="after")
+    def _few_enough_boxes(self) -> TerrainRecipe:
+        most = len(self.boxes) + (self.stairs.steps if self.stairs else 0)
+        most += self.random_blocks.count[1] if self.random_blocks else 0
+        if most > MAX_BOXES:
+            raise ValueError(f"up to {most} boxes (boxes + stairs.steps + random_blocks.count); at most {MAX_BOXES}")
+        return self
 
 
 def realize(recipe: TerrainRecipe, rng: np.random.Generator) -> Terrain:
