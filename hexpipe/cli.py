@@ -126,10 +126,16 @@ def train_ppo_cmd(
     writable(cfg.ppo.out_dir, cfg.ppo.report_dir)
     with user_errors():
         metrics = train_ppo(cfg, resume=resume)
+    if metrics.get("finished"):
+        console.print(f"train-ppo: nothing to do: the run in {cfg.ppo.out_dir} already reached {metrics['timesteps']} "
+                      "steps under the same params, code and encoder (raise ppo.total_timesteps to train on)")
+        return
+    rate = metrics["time/train_steps_per_s"]
+    speed = (f"{rate:.0f} steps/s ({metrics['time/train_vs_bare']:.0%} of the bare env's "
+             f"{metrics['time/bare_env_steps_per_s']:.0f})" if rate else "no steps taken now (policy re-exported)")
     console.print(
         f"train-ppo: {metrics['timesteps']} steps, success {metrics.get('episode/success_rate', 0):.0%} "
-        f"(last 20 episodes), {metrics['time/train_steps_per_s']:.0f} steps/s "
-        f"({metrics['time/train_vs_bare']:.0%} of the bare env's {metrics['time/bare_env_steps_per_s']:.0f})"
+        f"(last 20 episodes), {speed}"
     )
 
 
