@@ -48,12 +48,12 @@ def _user_errors() -> tuple[type[Exception], ...]:
 def user_errors() -> Iterator[None]:
     try:
         yield
+    except KeyboardInterrupt:  # first: evaluating _user_errors() imports torch, seconds after a Ctrl-C
+        console.print("[yellow]interrupted[/yellow]: completed outputs are kept; rerun to finish")
+        raise typer.Exit(130) from None
     except _user_errors() as exc:
         console.print(f"[red]error:[/red] {' '.join(str(exc).split())}", highlight=False, soft_wrap=True)
         raise typer.Exit(2) from None
-    except KeyboardInterrupt:
-        console.print("[yellow]interrupted[/yellow]: completed outputs are kept; rerun to finish")
-        raise typer.Exit(130) from None
 
 
 @app.callback()
@@ -90,7 +90,8 @@ def collect(
     with Progress("[bold]collect", BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(), console=console) as bar:
         task = bar.add_task("episodes", total=cfg.collect.episodes)
         with user_errors():
-            result = run_collect(cfg, on_episode=lambda done, total: bar.update(task, completed=done, total=total))
+            result = run_collect(cfg, on_episode=lambda done, total: bar.update(task, completed=done, total=total),
+                                 say=lambda note: console.print(note, highlight=False, markup=False))
     write_json(report, result)
     rate = result.get("logging_rate_vs_bare")
     console.print(

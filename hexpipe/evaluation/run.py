@@ -17,8 +17,7 @@ import shlex
 import sys
 import time
 from collections.abc import Callable, Iterable
-from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
-from multiprocessing import get_context
+from concurrent.futures import FIRST_COMPLETED, Future, wait
 from pathlib import Path
 from typing import Any
 
@@ -39,6 +38,7 @@ from hexpipe.evaluation.metrics import Table, rank_gaits, summarise
 from hexpipe.evaluation.report import ReportInputs, write_reports
 from hexpipe.evaluation.suite import Scenario, evaluation_suite, training_suite
 from hexpipe.paths import inside
+from hexpipe.workers import worker_pool
 
 WORKERS = 2  # worker processes, one env each
 GRID_SEEDS = 3  # episodes per gait and training terrain in the best_fixed search
@@ -73,7 +73,7 @@ def _run_pool(
     """Run `jobs` in the worker pool; when the last grid job finishes, also run `best_fixed_jobs(grid results)`."""
     results: list[EpisodeResult] = []
     grid_left = sum(j.controller.name == GRID for j in jobs)
-    with ProcessPoolExecutor(max_workers=WORKERS, mp_context=get_context("fork")) as pool:
+    with worker_pool(WORKERS, ignore_sigint=False) as pool:  # workers die with a killed evaluate
         pending: dict[Future, EpisodeJob] = {pool.submit(run_episode, params, j): j for j in jobs}
         try:
             while pending:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import os
 import shutil
 import time
 from collections.abc import Callable
@@ -26,6 +27,7 @@ from hexpipe.rl.checkpoint import (
     save_policy,
 )
 from hexpipe.rl.features import TerrainFeatures
+from hexpipe.workers import die_with_parent
 
 POLICY_CONFIG = "policy.json"
 
@@ -33,8 +35,10 @@ POLICY_CONFIG = "policy.json"
 def env_factory(params: Params, terrain: str, sensors: tuple[str, ...], randomize: bool) -> Callable[[], HexapodEnv]:
     """A picklable constructor for one environment (SubprocVecEnv builds it in the worker)."""
     task = params.task.model_copy(update={"sensors": sensors})
+    parent = os.getpid()
 
     def make() -> HexapodEnv:
+        die_with_parent(parent)  # in a SubprocVecEnv worker: no orphan after a kill -9 of train-ppo
         return HexapodEnv(
             terrain, sim=params.sim, cpg=params.cpg, sensors=params.sensors, task=task, randomize=randomize
         )
