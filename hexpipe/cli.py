@@ -83,10 +83,13 @@ def collect(
     """Random-policy rollouts over the terrain mix, logged to MCAP (RGB, height map, TF, scene, CPG, joints)."""
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn
 
+    from hexpipe.collect import check_manifest
     from hexpipe.collect import collect as run_collect
 
     cfg = load(params, set_)
     writable(cfg.collect.out_dir, report.parent)
+    with user_errors():
+        check_manifest(cfg)  # before the progress bar: a bad manifest is one line
     with Progress("[bold]collect", BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(), console=console) as bar:
         task = bar.add_task("episodes", total=cfg.collect.episodes)
         with user_errors():

@@ -105,6 +105,13 @@ def run_episode(params: Params, plan: EpisodePlan, out_dir: Path) -> dict[str, A
     }
 
 
+def check_manifest(params: Params) -> None:
+    """Fail early (ManifestError, one line) on a manifest of the wrong shape in collect.out_dir."""
+    out_dir = Path(params.collect.out_dir)
+    if read_signature(out_dir) == dataset_signature(params):
+        read_manifest(out_dir)
+
+
 def trusted_episodes(out_dir: Path, signature: str, wanted: set[str], say: Callable[[str], None]) -> dict[str, Any]:
     """The manifest's episodes that belong to this plan and whose files are intact (size and hash), by file name.
 

@@ -20,6 +20,10 @@ Triple = tuple[float, float, float]
 PositiveInt = Annotated[int, Field(ge=1)]
 PositiveFloat = Annotated[float, Field(gt=0)]
 Fraction = Annotated[float, Field(ge=0, le=1)]
+# Upper bounds on sizes, so that a typo (an extra zero or three) is an error, not a stage that never ends
+Pixels = Annotated[int, Field(ge=1, le=2048)]  # camera image side
+Cells = Annotated[int, Field(ge=1, le=512)]  # height-map side: rows x cols points are sampled every step
+Workers = Annotated[int, Field(ge=1, le=64)]  # worker processes
 
 
 class ConfigError(ValueError):
@@ -44,8 +48,8 @@ class _Section(BaseModel):
 class SimConfig(_Section):
     """Physics and low-level control."""
 
-    physics_hz: PositiveInt = 240  # PyBullet step rate (Hz)
-    control_hz: PositiveInt = 20  # policy / env step rate (Hz); physics_hz must be a multiple
+    physics_hz: Annotated[int, Field(ge=1, le=10_000)] = 240  # PyBullet step rate (Hz)
+    control_hz: Annotated[int, Field(ge=1, le=1_000)] = 20  # policy / env step rate (Hz); physics_hz must be a multiple
     friction: PositiveFloat = 1.0  # lateral friction of ground and feet
     position_gain: PositiveFloat = 0.3  # PyBullet PD position gain (dimensionless, per joint motor)
     velocity_gain: PositiveFloat = 1.0  # PyBullet PD velocity gain (dimensionless)
@@ -57,6 +61,23 @@ class SimConfig(_Section):
     def _rates_divide(self) -> SimConfig:
         if self.physics_hz % self.control_hz:
             raise ValueError(f"control_hz={self.control_hz} must divide physics_hz={self.physics_hz}")
+        return self
+
+    @model_validator(mode="after")
+    def _stance_reachable(self) -> SimConfig:
+        """The stance pose must be one the legs can reach (checked here, not at the first env reset)."""
+        from hexpipe.sim.gait import leg_ik
+        from hexpipe.sim.robot import RobotSpec
+
+        spec = RobotSpec()
+        try:
+            leg_ik(self.stance_reach - spec.bracket_length, self.body_height - spec.foot_radius, spec.upper_length,
+                   spec.lower_length)
+        except ValueError:
+            raise ValueError(
+                f"body_height={self.body_height} m and stance_reach={self.stance_reach} m put the feet out of the "
+                f"legs' reach ({spec.upper_length + spec.lower_length} m of leg)"
+            ) from None
         return self
 
 
@@ -94,13 +115,13 @@ Sensor = Literal["rgb", "heightmap"]
 class SensorConfig(_Section):
     """Terrain sensors: a body camera looking ahead and down, and a body-centred height map ahead."""
 
-    camera_width: PositiveInt = 64  # pixels (the paper used 320x220)
-    camera_height: PositiveInt = 64
+    camera_width: Pixels = 64  # pixels (the paper used 320x220)
+    camera_height: Pixels = 64
     camera_fov_deg: Annotated[float, Field(gt=10, lt=170)] = 75.0
     camera_pitch_deg: Annotated[float, Field(ge=0, le=90)] = 35.0  # looking down from horizontal
     camera_mount: Triple = (0.30, 0.0, 0.10)  # position in the base frame (m)
-    heightmap_rows: PositiveInt = 32  # cells along the heading
-    heightmap_cols: PositiveInt = 32  # cells across
+    heightmap_rows: Cells = 32  # cells along the heading
+    heightmap_cols: Cells = 32  # cells across
     heightmap_ahead: tuple[float, float] = (-0.2, 1.4)  # forward extent in the heading frame (m)
     heightmap_width: PositiveFloat = 1.6  # lateral extent (m)
 
@@ -140,7 +161,7 @@ class CollectConfig(_Section):
     terrains: dict[str, PositiveFloat] = {"single_block": 1.0, "random_blocks": 1.0, "flat": 0.25}
     log_every: PositiveInt = 3  # log every k-th control step; at 3, logging (camera renders included) costs < 20%
     max_seconds: PositiveFloat = 25.0  # per-episode cap (s of sim time)
-    workers: PositiveInt = 2
+    workers: Workers = 2
     seed: int = 0
     action_scale: Fraction = 0.7  # random second-derivative actions drawn uniformly in +-action_scale
     out_dir: str = "data/rollouts"
@@ -175,7 +196,7 @@ class PpoConfig(_Section):
     """stable-baselines3 PPO over the CPG-parameter action space."""
 
     total_timesteps: PositiveInt = 100_000
-    n_envs: PositiveInt = 2
+    n_envs: Workers = 2
     n_steps: PositiveInt = 512
     batch_size: PositiveInt = 128
     n_epochs: PositiveInt = 10
