@@ -125,6 +125,9 @@ def test_params_file_faults_are_one_line(tmp_path):
         path.write_text(text)
         line = one_line_error(runner.invoke(app, ["bench", "--params", str(path)]))
         assert expected in line and str(path) in line, (text, line)
+    path = tmp_path / "p.yaml"
+    path.write_bytes(b"sim:\n  friction: \xff\xfe\n")  # not text: unreadable as YAML
+    assert "cannot read (UnicodeDecodeError)" in one_line_error(runner.invoke(app, ["bench", "--params", str(path)]))
     with pytest.raises(ConfigError, match="duplicate key 'a'"):
         load_params(ROOT / "params.yaml", ["sim={a: 1, a: 2}"])
     (tmp_path / "p.yaml").write_text("{}\n")  # all defaults, said on purpose
@@ -194,6 +197,9 @@ def test_terrain_file_faults_are_one_line(tmp_path):
         "rough: {x: [0, 99], y: [-50, 50]}\n": "at most 250000",
         "boxes: [" + ", ".join(["{face: 1, depth: 0.1, height: 0.1}"] * 201) + "]\n": "at most 200",
     }
+    (tmp_path / "t.yaml").write_bytes(b"boxes: \xff\n")
+    with pytest.raises(TerrainError, match="cannot read"):
+        load_terrain(str(tmp_path / "t.yaml"))
     for text, expected in cases.items():
         path = tmp_path / "t.yaml"
         path.write_text(text)
@@ -314,3 +320,41 @@ def test_evaluate_never_names_or_deletes_outside_its_folder(tmp_path):
         "evaluate", "--no-summary", "--terrain", str(terrain), "--set", f"eval.out_dir={tmp_path / 'eval' / 'out'}",
         "--set", f"eval.report_dir={tmp_path / 'r'}", "--set", f"eval.policy_dir={tmp_path / 'no-policy'}"]))
     assert "no-policy" in line and outside.exists()
+
+
+def test_env_workers_die_with_a_killed_train_ppo(tmp_path):
+    """kill -9 of train-ppo alone: its SubprocVecEnv workers must not live on."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    def children(pid: int) -> list[int]:
+        return [int(c) for t in Path(f"/proc/{pid}/task").iterdir() for c in (t / "children").read_text().split()]
+
+    def running(pid: int) -> bool:
+        try:
+            return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+        except (FileNotFoundError, ProcessLookupError):
+            return False
+
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "hexpipe.cli", "train-ppo", "--set", "ppo.blind=true", "--set", "ppo.n_envs=2",
+         "--set", f"ppo.out_dir={tmp_path / 'ppo'}", "--set", f"ppo.report_dir={tmp_path / 'r'}"],
+        cwd=ROOT, start_new_session=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        deadline = time.time() + 120
+        while time.time() < deadline and len(children(proc.pid)) < 2:
+            time.sleep(0.05)
+        workers = children(proc.pid)
+        assert len(workers) >= 2
+    finally:
+        os.kill(proc.pid, signal.SIGKILL)
+        proc.wait(timeout=30)
+    deadline = time.time() + 10
+    alive = workers
+    while alive and time.time() < deadline:
+        alive = [w for w in workers if running(w)]
+        time.sleep(0.05)
+    assert not alive, f"env workers {alive} outlived train-ppo"
