@@ -36,25 +36,27 @@ def _user_errors() -> tuple[type[Exception], ...]:
     from hexpipe.models.train_vae import VaeDataError
     from hexpipe.models.vae import EncoderError
     from hexpipe.models.weights import WeightsError
+    from hexpipe.paths import OutputError
     from hexpipe.play import PlayError
     from hexpipe.recording.reader import RecordingError
     from hexpipe.rl.policy import PolicyError
     from hexpipe.sim.terrain import TerrainError
 
+    # OSError last: an unreadable input or a full disk is the user's to fix, and its message names the path
     return (ConfigError, FileNotFoundError, TerrainError, EncoderError, VaeDataError, RecordingError, PolicyError,
-            VideoError, WeightsError, PlayError)
+            VideoError, WeightsError, PlayError, OutputError, OSError)
 
 
 @contextmanager
 def user_errors() -> Iterator[None]:
     try:
         yield
-    except _user_errors() as exc:
-        console.print(f"[red]error:[/red] {exc}", highlight=False, soft_wrap=True)
-        raise typer.Exit(2) from None
-    except KeyboardInterrupt:
+    except KeyboardInterrupt:  # first: evaluating _user_errors() imports torch, seconds after a Ctrl-C
         console.print("[yellow]interrupted[/yellow]: completed outputs are kept; rerun to finish")
         raise typer.Exit(130) from None
+    except _user_errors() as exc:
+        console.print(f"[red]error:[/red] {' '.join(str(exc).split())}", highlight=False, soft_wrap=True)
+        raise typer.Exit(2) from None
 
 
 def _print_version(value: bool) -> None:
@@ -79,6 +81,14 @@ def load(params: Path, overrides: list[str] | None) -> Params:
         return load_params(params, overrides or [])
 
 
+def writable(*folders: str | Path) -> None:
+    """Refuse to start a stage whose output folders cannot be written (one line, before any work)."""
+    from hexpipe.paths import check_writable
+
+    with user_errors():
+        check_writable(*folders)
+
+
 @app.command()
 def collect(
     params: ParamsOpt = Path("params.yaml"),
@@ -88,13 +98,18 @@ def collect(
     """Random-policy rollouts over the terrain mix, logged to MCAP (RGB, height map, TF, scene, CPG, joints)."""
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn
 
+    from hexpipe.collect import check_manifest
     from hexpipe.collect import collect as run_collect
 
     cfg = load(params, set_)
+    writable(cfg.collect.out_dir, report.parent)
+    with user_errors():
+        check_manifest(cfg)  # before the progress bar: a bad manifest is one line
     with Progress("[bold]collect", BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(), console=console) as bar:
         task = bar.add_task("episodes", total=cfg.collect.episodes)
         with user_errors():
-            result = run_collect(cfg, on_episode=lambda done, total: bar.update(task, completed=done, total=total))
+            result = run_collect(cfg, on_episode=lambda done, total: bar.update(task, completed=done, total=total),
+                                 say=lambda note: console.print(note, highlight=False, markup=False))
     write_json(report, result)
     rate = result.get("logging_rate_vs_bare")
     console.print(
@@ -110,6 +125,7 @@ def train_vae_cmd(params: ParamsOpt = Path("params.yaml"), set_: SetOpt = None) 
     from hexpipe.models.train_vae import train_vae
 
     cfg = load(params, set_)
+    writable(cfg.vae.out_dir, cfg.vae.report_dir)
     with user_errors():
         metrics = train_vae(cfg.vae)
     shown = {k: round(v, 4) for k, v in metrics.items() if k in ("val/loss", "probe_accuracy", "probe_baseline")}
@@ -126,12 +142,19 @@ def train_ppo_cmd(
     from hexpipe.rl.train import train_ppo
 
     cfg = load(params, set_)
+    writable(cfg.ppo.out_dir, cfg.ppo.report_dir)
     with user_errors():
         metrics = train_ppo(cfg, resume=resume)
+    if metrics.get("finished"):
+        console.print(f"train-ppo: nothing to do: the run in {cfg.ppo.out_dir} already reached {metrics['timesteps']} "
+                      "steps under the same params, code and encoder (raise ppo.total_timesteps to train on)")
+        return
+    rate = metrics["time/train_steps_per_s"]
+    speed = (f"{rate:.0f} steps/s ({metrics['time/train_vs_bare']:.0%} of the bare env's "
+             f"{metrics['time/bare_env_steps_per_s']:.0f})" if rate else "no steps taken now (policy re-exported)")
     console.print(
         f"train-ppo: {metrics['timesteps']} steps, success {metrics.get('episode/success_rate', 0):.0%} "
-        f"(last 20 episodes), {metrics['time/train_steps_per_s']:.0f} steps/s "
-        f"({metrics['time/train_vs_bare']:.0%} of the bare env's {metrics['time/bare_env_steps_per_s']:.0f})"
+        f"(last 20 episodes), {speed}"
     )
 
 
@@ -151,6 +174,7 @@ def evaluate(
     from hexpipe.summary import write_summary
 
     cfg = load(params, set_)
+    writable(cfg.eval.out_dir, cfg.eval.report_dir, *(["reports"] if write_page else []))
     with user_errors():
         summary_text = run_evaluate(cfg, extra_terrains=tuple(terrain or ()))
     console.print(summary_text)

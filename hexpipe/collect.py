@@ -9,12 +9,10 @@ atomically after every finished episode: it never lists a file that cannot be re
 
 from __future__ import annotations
 
-import json
 import time
 from collections.abc import Callable
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import FIRST_COMPLETED, wait
 from dataclasses import asdict, dataclass
-from multiprocessing import get_context
 from pathlib import Path
 from typing import Any
 
@@ -22,8 +20,11 @@ import numpy as np
 
 from hexpipe.config import Params, params_hash
 from hexpipe.envs.hexapod import HexapodEnv
+from hexpipe.paths import safe_name
+from hexpipe.recording.manifest import MANIFEST as MANIFEST  # re-exported for callers
+from hexpipe.recording.manifest import check_file, file_digest, read_manifest, read_signature, write_manifest
+from hexpipe.workers import sigint_flag, stop_pool, worker_pool
 
-MANIFEST = "manifest.json"
 TIMINGS = ("seconds", "env_seconds")  # wall-clock figures: reported, never in the (reproducible) manifest
 
 
@@ -35,7 +36,7 @@ class EpisodePlan:
 
     @property
     def file(self) -> str:
-        return f"ep_{self.index:05d}_{Path(self.terrain).stem}.mcap"
+        return f"ep_{self.index:05d}_{safe_name(Path(self.terrain).stem, fallback='terrain')}.mcap"
 
 
 def plan_episodes(params: Params) -> list[EpisodePlan]:
@@ -98,66 +99,93 @@ def run_episode(params: Params, plan: EpisodePlan, out_dir: Path) -> dict[str, A
     return {
         **asdict(plan), "file": plan.file, "frames": log.frames, "steps": env.steps,
         "distance": round(info["distance"], 4), "termination": info["termination"] or "time_limit",
-        "bytes": (out_dir / plan.file).stat().st_size, "seconds": round(seconds, 4),
+        "bytes": (out_dir / plan.file).stat().st_size, "digest": file_digest(out_dir / plan.file),
+        "seconds": round(seconds, 4),
         "env_seconds": round(env_seconds, 4),
     }
 
 
-def read_manifest(out_dir: Path) -> dict[str, Any] | None:
-    path = out_dir / MANIFEST
-    if not path.is_file():
-        return None
-    try:
-        return json.loads(path.read_text())
-    except json.JSONDecodeError:
-        return None  # a manifest is only ever replaced atomically; an unreadable one is foreign: start over
+def check_manifest(params: Params) -> None:
+    """Fail early (ManifestError, one line) on a manifest of the wrong shape in collect.out_dir."""
+    out_dir = Path(params.collect.out_dir)
+    if read_signature(out_dir) == dataset_signature(params):
+        read_manifest(out_dir)
 
 
-def write_manifest(out_dir: Path, signature: str, rows: list[dict[str, Any]]) -> None:
-    """Rewrite the manifest atomically; wall-clock timings stay out so the dataset is byte-for-byte reproducible."""
-    episodes = [{k: v for k, v in r.items() if k not in TIMINGS} for r in sorted(rows, key=lambda r: r["index"])]
-    tmp = out_dir / (MANIFEST + ".tmp")
-    tmp.write_text(json.dumps({"signature": signature, "episodes": episodes}, indent=1))
-    tmp.replace(out_dir / MANIFEST)
+def trusted_episodes(out_dir: Path, signature: str, wanted: set[str], say: Callable[[str], None]) -> dict[str, Any]:
+    """The manifest's episodes that belong to this plan and whose files are intact (size and hash), by file name.
+
+    A manifest made under another signature lists nothing usable; a damaged file is dropped, so it is collected
+    again; a manifest of the wrong shape is a ManifestError (one line)."""
+    if read_signature(out_dir) != signature:
+        return {}
+    manifest = read_manifest(out_dir)
+    done: dict[str, Any] = {}
+    if manifest is None:  # removed since its signature was read
+        return done
+    for row in manifest.episodes:
+        if row.file not in wanted:
+            continue
+        problem = check_file(out_dir, row)
+        if problem is None:
+            done[row.file] = row.model_dump()
+        elif problem != "missing":
+            say(f"collect: {out_dir / row.file} is damaged ({problem}); collecting it again")
+    return done
 
 
-def collect(params: Params, on_episode: Callable[[int, int], None] | None = None) -> dict[str, Any]:
-    """Run the missing episodes of the plan in worker processes; returns the collect report."""
+def collect(
+    params: Params, on_episode: Callable[[int, int], None] | None = None, say: Callable[[str], None] = print,
+) -> dict[str, Any]:
+    """Run the missing episodes of the plan in worker processes; returns the collect report.
+
+    Ctrl-C (SIGINT) stops at once: queued episodes are cancelled, running ones killed (they leave only temp files),
+    and every episode that finished is in the manifest before KeyboardInterrupt is raised."""
     cfg = params.collect
     out_dir = Path(cfg.out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     signature = dataset_signature(params)
     plans = plan_episodes(params)
-    wanted = {p.file for p in plans}
-
-    manifest = read_manifest(out_dir)
-    done: dict[str, dict[str, Any]] = {}
-    if manifest is not None and manifest.get("signature") == signature:
-        done = {r["file"]: r for r in manifest["episodes"] if r["file"] in wanted and (out_dir / r["file"]).is_file()}
-    for stale in out_dir.glob("*.mcap*"):  # other params' episodes, and partial files of a killed run
-        if stale.name not in done:
-            stale.unlink()
+    done = trusted_episodes(out_dir, signature, {p.file for p in plans}, say)
+    stale = [p for p in out_dir.glob("*.mcap*") if p.name not in done]  # other params', damaged, partial, foreign
+    for path in stale:
+        path.unlink()
+    if stale:
+        say(f"collect: removed {len(stale)} file(s) in {out_dir} that the manifest does not vouch for")
     write_manifest(out_dir, signature, list(done.values()))
 
     pending = [p for p in plans if p.file not in done]
     ran: list[dict[str, Any]] = []
     if on_episode:
         on_episode(len(done), len(plans))
-    with ProcessPoolExecutor(max_workers=cfg.workers, mp_context=get_context("fork")) as pool:
-        start = time.perf_counter()
-        futures = [pool.submit(run_episode, params, plan, out_dir) for plan in pending]
+
+    def record(row: dict[str, Any]) -> None:
+        done[row["file"]] = {k: v for k, v in row.items() if k not in TIMINGS}
+        ran.append(row)
+        write_manifest(out_dir, signature, list(done.values()))
+        if on_episode:
+            on_episode(len(done), len(plans))
+
+    start = time.perf_counter()
+    with worker_pool(cfg.workers) as pool, sigint_flag() as interrupted:
+        futures = {pool.submit(run_episode, params, plan, out_dir) for plan in pending}
         try:
-            for future in as_completed(futures):
-                row = future.result()
-                done[row["file"]] = row
-                ran.append(row)
-                write_manifest(out_dir, signature, list(done.values()))
-                if on_episode:
-                    on_episode(len(done), len(plans))
+            while futures and not interrupted():
+                finished, futures = wait(futures, timeout=0.05, return_when=FIRST_COMPLETED)
+                for future in finished:
+                    record(future.result())
         except BaseException:
-            for f in futures:
-                f.cancel()
+            stop_pool(pool)
             raise
+        if interrupted():
+            stop_pool(pool)
+            for future in futures:  # finished between the last poll and the stop: keep them too
+                if future.done() and not future.cancelled() and future.exception() is None:
+                    record(future.result())
+            for plan in pending:  # a file renamed into place by a worker killed before it reported: unvouched
+                if plan.file not in done:
+                    (out_dir / plan.file).unlink(missing_ok=True)
+            raise KeyboardInterrupt
     wall = time.perf_counter() - start
     return collect_report(list(done.values()), ran, wall, cfg.workers)
 

@@ -12,13 +12,18 @@ import math
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
-import yaml
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+
+from hexpipe.validation import bool_misused, format_validation_error, parse_yaml, read_yaml, show
 
 Triple = tuple[float, float, float]
 PositiveInt = Annotated[int, Field(ge=1)]
 PositiveFloat = Annotated[float, Field(gt=0)]
 Fraction = Annotated[float, Field(ge=0, le=1)]
+# Upper bounds on sizes, so that a typo (an extra zero or three) is an error, not a stage that never ends
+Pixels = Annotated[int, Field(ge=1, le=2048)]  # camera image side
+Cells = Annotated[int, Field(ge=1, le=512)]  # height-map side: rows x cols points are sampled every step
+Workers = Annotated[int, Field(ge=1, le=64)]  # worker processes
 
 
 class ConfigError(ValueError):
@@ -26,7 +31,18 @@ class ConfigError(ValueError):
 
 
 class _Section(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    """Every params section: unknown keys, inf/NaN and booleans given for numbers are refused."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+
+    @field_validator("*", mode="before")
+    @classmethod
+    def _no_bool_for_number(cls, value: Any, info: Any) -> Any:
+        """YAML `true` is not the number 1: refuse a bool (alone or in a list) unless the field is a bool."""
+        field = cls.model_fields.get(info.field_name)
+        if field is not None and bool_misused(field.annotation, value):
+            raise ValueError(f"expected a number or text, not a boolean (got {show(value)})")
+        return value
 
 
 class SimConfig(_Section):
@@ -37,7 +53,7 @@ class SimConfig(_Section):
     # PyBullet's numSolverIterations (its own default is 50). 20 keeps the premise and the walking speeds; 10 is 10%
     # faster but walks 6% slower and raises the low gait's cost of transport by 20% (README, Performance)
     solver_iterations: Annotated[int, Field(ge=1, le=1000)] = 20
-    control_hz: PositiveInt = 20  # policy / env step rate (Hz); physics_hz must be a multiple
+    control_hz: Annotated[int, Field(ge=1, le=1_000)] = 20  # policy / env step rate (Hz); physics_hz must be a multiple
     friction: PositiveFloat = 1.0  # lateral friction of ground and feet
     # PyBullet PD position gain (dimensionless, per joint motor). It acts per physics step (the motor asks for a
     # velocity of gain * error / dt), so the servo's bandwidth is gain * physics_hz: 0.6 at 120 Hz = 0.3 at 240 Hz
@@ -51,6 +67,23 @@ class SimConfig(_Section):
     def _rates_divide(self) -> SimConfig:
         if self.physics_hz % self.control_hz:
             raise ValueError(f"control_hz={self.control_hz} must divide physics_hz={self.physics_hz}")
+        return self
+
+    @model_validator(mode="after")
+    def _stance_reachable(self) -> SimConfig:
+        """The stance pose must be one the legs can reach (checked here, not at the first env reset)."""
+        from hexpipe.sim.gait import leg_ik
+        from hexpipe.sim.robot import RobotSpec
+
+        spec = RobotSpec()
+        try:
+            leg_ik(self.stance_reach - spec.bracket_length, self.body_height - spec.foot_radius, spec.upper_length,
+                   spec.lower_length)
+        except ValueError:
+            raise ValueError(
+                f"body_height={self.body_height} m and stance_reach={self.stance_reach} m put the feet out of the "
+                f"legs' reach ({spec.upper_length + spec.lower_length} m of leg)"
+            ) from None
         return self
 
 
@@ -88,13 +121,13 @@ Sensor = Literal["rgb", "heightmap"]
 class SensorConfig(_Section):
     """Terrain sensors: a body camera looking ahead and down, and a body-centred height map ahead."""
 
-    camera_width: PositiveInt = 64  # pixels (the paper used 320x220)
-    camera_height: PositiveInt = 64
+    camera_width: Pixels = 64  # pixels (the paper used 320x220)
+    camera_height: Pixels = 64
     camera_fov_deg: Annotated[float, Field(gt=10, lt=170)] = 75.0
     camera_pitch_deg: Annotated[float, Field(ge=0, le=90)] = 35.0  # looking down from horizontal
     camera_mount: Triple = (0.30, 0.0, 0.10)  # position in the base frame (m)
-    heightmap_rows: PositiveInt = 32  # cells along the heading
-    heightmap_cols: PositiveInt = 32  # cells across
+    heightmap_rows: Cells = 32  # cells along the heading
+    heightmap_cols: Cells = 32  # cells across
     heightmap_ahead: tuple[float, float] = (-0.2, 1.4)  # forward extent in the heading frame (m)
     heightmap_width: PositiveFloat = 1.6  # lateral extent (m)
 
@@ -115,7 +148,6 @@ class RandomizationConfig(_Section):
 class TaskConfig(_Section):
     """Episode rules: the paper's 3 m goal, stuck and fall detection, time limit."""
 
-    terrain: str = "single_block"  # named scenario or path to a terrain YAML
     sensors: tuple[Sensor, ...] = ("heightmap",)
     goal_distance: PositiveFloat = 3.0  # m of forward progress that ends an episode with success
     stuck_window: PositiveFloat = 4.0  # s over which progress is measured
@@ -139,7 +171,7 @@ class CollectConfig(_Section):
     terrains: dict[str, PositiveFloat] = {"single_block": 1.0, "random_blocks": 0.5, "varied": 2.0, "flat": 0.25}
     log_every: PositiveInt = 3  # log every k-th control step; at 3, logging (camera renders included) costs < 20%
     max_seconds: PositiveFloat = 25.0  # per-episode cap (s of sim time)
-    workers: PositiveInt = 2
+    workers: Workers = 2
     seed: int = 0
     action_scale: Fraction = 0.7  # random second-derivative actions drawn uniformly in +-action_scale
     out_dir: str = "data/rollouts"
@@ -161,12 +193,20 @@ class VaeConfig(_Section):
     out_dir: str = "data/models/vae"
     report_dir: str = "reports/vae"
 
+    @field_validator("image_size")
+    @classmethod
+    def _image_size_fits(cls, size: int) -> int:
+        """Checked here, not after minutes of loading data: the encoder halves the image 4 times."""
+        if size < 16 or size % 16 or size > 512:
+            raise ValueError(f"must be a multiple of 16 (4 stride-2 layers) from 16 to 512, got {size}")
+        return size
+
 
 class PpoConfig(_Section):
     """stable-baselines3 PPO over the CPG-parameter action space."""
 
     total_timesteps: PositiveInt = 100_000
-    n_envs: PositiveInt = 2
+    n_envs: Workers = 2
     n_steps: PositiveInt = 512
     batch_size: PositiveInt = 128
     n_epochs: PositiveInt = 10
@@ -261,47 +301,19 @@ def parse_override(text: str) -> tuple[str, Any]:
     key, sep, raw = text.partition("=")
     if not sep or not key.strip():
         raise ConfigError(f"--set {text!r}: expected section.key=value")
-    try:
-        value = yaml.safe_load(raw) if raw.strip() else ""
-    except yaml.YAMLError as exc:
-        raise ConfigError(f"--set {key}: value {raw!r} is not valid YAML ({exc.__class__.__name__})") from None
+    value = parse_yaml(raw, f"--set {key}", ConfigError) if raw.strip() else ""
     return key.strip(), value
 
 
-def _allowed_keys(model: type[BaseModel], loc: tuple[Any, ...]) -> list[str]:
-    for part in loc[:-1]:
-        field = model.model_fields.get(str(part))
-        annotation = getattr(field, "annotation", None)
-        if not (isinstance(annotation, type) and issubclass(annotation, BaseModel)):
-            return []
-        model = annotation
-    return sorted(model.model_fields)
-
-
-def format_validation_error(exc: ValidationError, model: type[BaseModel], source: str) -> str:
-    """One line naming the first bad key, what was given and what is allowed."""
-    err = exc.errors()[0]
-    loc = tuple(err["loc"])
-    key = ".".join(str(p) for p in loc) or "(top level)"
-    if err["type"] == "extra_forbidden":
-        allowed = ", ".join(_allowed_keys(model, loc))
-        return f"{source}: unknown key '{key}'; allowed here: {allowed}"
-    given = err.get("input")
-    shown = "" if isinstance(given, dict) else f" (got {given!r})"
-    return f"{source}: {key}: {err['msg']}{shown}"
-
-
 def load_params(path: str | Path = "params.yaml", overrides: list[str] | tuple[str, ...] = ()) -> Params:
-    """Read params.yaml (missing file -> defaults only if path is None), apply --set overrides, validate."""
+    """Read params.yaml, apply --set overrides, validate. An empty file is refused: it would silently mean the
+    defaults, which is never what a user who points at a file wants (an empty mapping, `{}`, says so on purpose)."""
     path = Path(path)
     if not path.is_file():
         raise ConfigError(f"params file not found: {path}")
-    try:
-        tree = yaml.safe_load(path.read_text()) or {}
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f" line {mark.line + 1}" if mark else ""
-        raise ConfigError(f"{path}:{where}: not valid YAML") from None
+    tree = read_yaml(path, ConfigError)
+    if tree is None:
+        raise ConfigError(f"{path}: the file is empty; write the sections to change (or `{{}}` for all defaults)")
     if not isinstance(tree, dict):
         raise ConfigError(f"{path}: top level must be a mapping of sections")
     for text in overrides:

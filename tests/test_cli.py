@@ -45,7 +45,7 @@ def test_overrides_are_typed_and_nested():
         ("ppo.n_envs=0", "greater than or equal to 1"),
         ("cpg.initial=[0.25, 0.9, 4.0]", "b: need 0 < lower"),
         ("sim.control_hz=7", "control_hz=7 must divide physics_hz=120"),
-        ("task.sensors=[lidar]", "task.sensors.0"),
+        ("task.sensors=[lidar]", "task.sensors[0]"),
         ("nosuchsection.x=1", "unknown key 'nosuchsection'"),
         ("ppo", "expected section.key=value"),
         ("ppo.train_terrains=[flat, rough, stairs]", "train_terrains has 3 terrains but n_envs=2"),

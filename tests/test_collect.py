@@ -70,9 +70,26 @@ def test_plan_is_deterministic_and_follows_the_mix(tmp_path):
     assert 0.55 < share < 0.95
 
 
+def _children(pid: int) -> list[int]:
+    return [int(c) for t in Path(f"/proc/{pid}/task").iterdir() for c in (t / "children").read_text().split()]
+
+
+def _running(pid: int) -> bool:
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"  # not a zombie
+    except (FileNotFoundError, ProcessLookupError):
+        return False
+
+
 @pytest.mark.parametrize("signal_name", ["SIGINT", "SIGKILL"])
 def test_interrupted_collect_leaves_no_unreadable_file_and_rerun_completes(tmp_path, signal_name):
-    """Ctrl-C or a kill of the whole process group mid-dataset, then a rerun."""
+    """Ctrl-C or a kill of the whole process group mid-dataset, then a rerun.
+
+    Deterministic: when the first episode is in the manifest the test freezes the process group (SIGSTOP), so the
+    run cannot finish while the test decides; the signal is sent while frozen and lands on SIGCONT. (The old test
+    raced: if the run finished first, the SIGINT landed in the interpreter's teardown, where CPython drops a
+    KeyboardInterrupt, and collect exited 0.)"""
+    import contextlib
     import os
     import signal
     import subprocess
@@ -91,21 +108,58 @@ def test_interrupted_collect_leaves_no_unreadable_file_and_rerun_completes(tmp_p
         if manifest.is_file() and json.loads(manifest.read_text())["episodes"]:
             break
         time.sleep(0.05)
+    os.killpg(proc.pid, signal.SIGSTOP)
+    before = json.loads((out / MANIFEST).read_text())["episodes"]
+    assert proc.poll() is None and 1 <= len(before) < 6  # frozen mid-dataset
     os.killpg(proc.pid, getattr(signal, signal_name))
+    with contextlib.suppress(ProcessLookupError):  # after SIGKILL the group may be gone already
+        os.killpg(proc.pid, signal.SIGCONT)
     _, err = proc.communicate(timeout=60)
-    assert proc.returncode != 0
+    assert proc.returncode == (130 if signal_name == "SIGINT" else -9)
+    listed = json.loads((out / MANIFEST).read_text())["episodes"]
     if signal_name == "SIGINT":
         assert b"Traceback" not in err and b"interrupted" in err
-    listed = json.loads((out / MANIFEST).read_text())["episodes"]
-    assert 1 <= len(listed) < 6
+        # stopped at once: at most the two running episodes finished after the signal, no queued one started
+        assert len(before) <= len(listed) <= len(before) + 2
+        # every finished episode is recorded: no final file outside the manifest
+        assert {p.name for p in out.glob("*.mcap")} == {r["file"] for r in listed}
     for row in listed:
         assert sum(1 for _ in iter_frames(out / row["file"])) == row["frames"]
 
     rerun = subprocess.run(args, cwd=tmp_path, capture_output=True, timeout=300)
     assert rerun.returncode == 0, rerun.stderr.decode()[-2000:]
     report = json.loads((tmp_path / "collect.json").read_text())
-    assert report["episodes"] == 6 and report["episodes_run_now"] == 6 - len(listed)
-    assert not list(out.glob("*.tmp"))
+    assert report["episodes"] == 6 and report.get("episodes_run_now", 0) == 6 - len(listed)
+    assert not list(out.glob("*.tmp*")) and not list(out.glob(".*"))
+
+
+def test_workers_die_with_a_killed_collect(tmp_path):
+    """kill -9 of collect alone (not its group): its workers must not live on and write episodes."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    out = tmp_path / "rollouts"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "hexpipe.cli", "collect", "--params", str(ROOT / "params.yaml"),
+         "--set", "collect.episodes=8", "--set", "collect.workers=2", "--set", "collect.max_seconds=3",
+         "--set", f"collect.out_dir={out}", "--report", str(tmp_path / "collect.json")],
+        cwd=tmp_path, start_new_session=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.time() + 120
+    while time.time() < deadline and len(_children(proc.pid)) < 2:
+        time.sleep(0.05)
+    workers = _children(proc.pid)
+    assert len(workers) >= 2
+    os.kill(proc.pid, signal.SIGKILL)
+    proc.wait(timeout=30)
+    deadline = time.time() + 10
+    alive = workers
+    while alive and time.time() < deadline:
+        alive = [w for w in workers if _running(w)]
+        time.sleep(0.05)
+    assert not alive, f"workers {alive} outlived their collect"
 
 
 def test_changed_params_invalidate_old_episodes(tmp_path):

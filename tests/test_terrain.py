@@ -254,7 +254,7 @@ def test_size_error_text(tmp_path: Path) -> None:
     )
     with pytest.raises(TerrainError) as info:
         load_terrain(str(path))
-    assert str(info.value) == f"{path}: boxes[1].size: expected 3 positive numbers, got [0.3, -2]"
+    assert str(info.value) == f"{path}: boxes[1].size: expected 3 positive numbers (|x| <= 1000), got [0.3, -2]"
 
 
 def test_bad_concrete_data_raises_terrain_error() -> None:

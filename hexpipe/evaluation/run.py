@@ -17,8 +17,7 @@ import shlex
 import sys
 import time
 from collections.abc import Callable, Iterable
-from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
-from multiprocessing import get_context
+from concurrent.futures import FIRST_COMPLETED, Future, wait
 from pathlib import Path
 from typing import Any
 
@@ -38,6 +37,8 @@ from hexpipe.evaluation.episodes import TRACE_COLUMNS, EpisodeJob, EpisodeResult
 from hexpipe.evaluation.metrics import Table, rank_gaits, summarise
 from hexpipe.evaluation.report import ReportInputs, write_reports
 from hexpipe.evaluation.suite import Scenario, evaluation_suite, training_suite
+from hexpipe.paths import inside
+from hexpipe.workers import worker_pool
 
 WORKERS = 2  # worker processes, one env each
 GRID_SEEDS = 3  # episodes per gait and training terrain in the best_fixed search
@@ -72,7 +73,7 @@ def _run_pool(
     """Run `jobs` in the worker pool; when the last grid job finishes, also run `best_fixed_jobs(grid results)`."""
     results: list[EpisodeResult] = []
     grid_left = sum(j.controller.name == GRID for j in jobs)
-    with ProcessPoolExecutor(max_workers=WORKERS, mp_context=get_context("fork")) as pool:
+    with worker_pool(WORKERS, ignore_sigint=False) as pool:  # workers die with a killed evaluate
         pending: dict[Future, EpisodeJob] = {pool.submit(run_episode, params, j): j for j in jobs}
         try:
             while pending:
@@ -139,11 +140,11 @@ def command_line(params: Params, extra_terrains: Iterable[str]) -> str:
 
 
 def _remove_stale(out_dir: Path, suite: list[Scenario], written: set[Path]) -> None:
-    """Drop this suite's recordings that an earlier run left and this one did not rewrite."""
+    """Drop this suite's recordings that an earlier run left and this one did not rewrite (only inside out_dir)."""
     for scenario in suite:
         old = [*(out_dir / scenario.stem).glob("ep_*.mcap"), out_dir / f"{scenario.stem}.mp4"]
         for path in old:
-            if path.is_file() and path not in written:
+            if path.is_file() and path not in written and inside(path, out_dir):
                 path.unlink()
 
 

@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-import re
 from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 
 from hexpipe.config import Params
+from hexpipe.paths import safe_name
 from hexpipe.sim.terrain import TerrainError, TerrainRecipe, load_terrain
 
 
@@ -21,7 +21,7 @@ class Scenario:
 
 
 def _stem(source: str) -> str:
-    return re.sub(r"[^A-Za-z0-9_.-]", "_", Path(source).stem) or "terrain"
+    return safe_name(Path(source).stem, fallback="terrain")
 
 
 def load_scenarios(sources: Iterable[str]) -> list[Scenario]:

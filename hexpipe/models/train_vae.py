@@ -44,6 +44,7 @@ from hexpipe.models.vae import (
     vae_loss,
 )
 from hexpipe.provenance import code_fingerprint
+from hexpipe.recording.manifest import MANIFEST, listed_files
 from hexpipe.recording.reader import Frame, RecordingError, iter_frames
 
 CHECKPOINT = "checkpoint.pt"
@@ -211,6 +212,16 @@ def _present_modalities(folder: Path) -> set[str]:
     except RecordingError:
         pass
     return present
+
+
+def _note_unlisted(folder: Path, console: Console) -> None:
+    """Say which files of a rollout folder are left out: those its manifest does not list (see iter_frames)."""
+    listed = listed_files(folder) if folder.is_dir() else None
+    if listed is None and folder.is_dir():
+        console.log(f"[yellow]{folder} has no {MANIFEST}: training on every .mcap file in it")
+    elif listed is not None and listed[1]:
+        names = ", ".join(p.name for p in listed[1][:3]) + (", ..." if len(listed[1]) > 3 else "")
+        console.log(f"[yellow]ignoring {len(listed[1])} .mcap file(s) in {folder} not in its {MANIFEST}: {names}")
 
 
 def load_dataset(cfg: VaeConfig, frames: Iterable[Frame] | None = None) -> VaeDataset:
@@ -560,6 +571,8 @@ def train_vae(cfg: VaeConfig, frames: Iterable[Frame] | None = None) -> dict[str
     """Run the stage; frames=None reads cfg.data_dir. Returns the final metrics (as in metrics.json, flat)."""
     console = Console()
     threads = configure_threads()
+    if frames is None:
+        _note_unlisted(Path(cfg.data_dir), console)
     data = load_dataset(cfg, frames)
     train_idx, val_idx = split_by_episode(data, cfg.val_fraction, cfg.seed)
     n_val_eps = len(np.unique(data.episode_index[val_idx]))

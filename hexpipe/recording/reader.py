@@ -85,7 +85,7 @@ def count_messages(path: Path) -> dict[str, int]:
 
 
 def iter_frames(path_or_folder: Path, modalities: Sequence[str] = ("rgb", "heightmap")) -> Iterator[Frame]:
-    """Yield every logged step of one file, or of every `*.mcap` in a folder in sorted name order.
+    """Yield every logged step of one file, or of a folder's episodes (see `_episode_files`) in sorted name order.
 
     A step's messages share a log time; a step without a /step message is incomplete and skipped. Only the
     requested modalities are decoded (the others are None). A bad file raises `RecordingError` when reached,
@@ -99,8 +99,12 @@ def iter_frames(path_or_folder: Path, modalities: Sequence[str] = ("rgb", "heigh
 
 
 def _episode_files(path: Path) -> list[Path]:
+    """A file, or a folder's episodes: those its manifest lists when it has one (collect's folders), else all."""
     if path.is_dir():
-        files = sorted(p for p in path.glob("*.mcap") if p.is_file())
+        from hexpipe.recording.manifest import listed_files  # it imports this module
+
+        listed = listed_files(path)
+        files = sorted(listed[0]) if listed is not None else sorted(p for p in path.glob("*.mcap") if p.is_file())
         if not files:
             raise RecordingError(f"{path}: no .mcap files in this folder")
         return files

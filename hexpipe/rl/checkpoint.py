@@ -42,6 +42,19 @@ def save_checkpoint(model: BaseAlgorithm, root: Path, keep: int = 2) -> Path:
     return path
 
 
-def latest_checkpoint(root: Path) -> Path | None:
-    complete = [p for p in sorted(Path(root).glob("step-*[0-9]")) if (p / MODEL).is_file()]
-    return complete[-1] if complete else None
+def checkpoint_step(path: Path) -> int:
+    """The timesteps a checkpoint folder `step-<timesteps>` was saved at."""
+    return int(Path(path).name.removeprefix("step-"))
+
+
+def complete_checkpoints(root: Path, at_most: int | None = None) -> list[Path]:
+    """Checkpoints holding a model, newest first; with `at_most`, only those saved at or below that many steps
+    (a shorter budget must never reuse a longer run)."""
+    found = [p for p in Path(root).glob("step-*[0-9]") if p.name[5:].isdigit() and (p / MODEL).is_file()]
+    found = [p for p in found if at_most is None or checkpoint_step(p) <= at_most]
+    return sorted(found, key=checkpoint_step, reverse=True)
+
+
+def latest_checkpoint(root: Path, at_most: int | None = None) -> Path | None:
+    complete = complete_checkpoints(root, at_most)
+    return complete[0] if complete else None

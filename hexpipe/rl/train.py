@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import hashlib
 import json
+import os
 import shutil
 import time
 from collections.abc import Callable
@@ -14,12 +16,21 @@ import numpy as np
 from stable_baselines3 import PPO
 from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecEnv, VecEnvWrapper, VecNormalize
 
+from hexpipe.atomic import atomic_path, write_json, write_text
 from hexpipe.config import Params, params_hash
 from hexpipe.envs.hexapod import HexapodEnv
-from hexpipe.rl.checkpoint import MODEL, NORMALISATION, latest_checkpoint, save_checkpoint, save_policy
+from hexpipe.rl.checkpoint import (
+    MODEL,
+    NORMALISATION,
+    checkpoint_step,
+    complete_checkpoints,
+    save_checkpoint,
+    save_policy,
+)
 from hexpipe.rl.curriculum import Curriculum, CurriculumStats
 from hexpipe.rl.features import TerrainFeatures
 from hexpipe.rl.inference import export_weights
+from hexpipe.workers import die_with_parent
 
 POLICY_CONFIG = "policy.json"
 
@@ -28,8 +39,10 @@ def env_factory(params: Params, terrain: str, sensors: tuple[str, ...], randomiz
     """A picklable constructor for one environment (SubprocVecEnv builds it in the worker); with ppo.curriculum it
     keeps its own difficulty level (hexpipe/rl/curriculum.py)."""
     task = params.task.model_copy(update={"sensors": sensors})
+    parent = os.getpid()
 
     def make() -> gym.Env:
+        die_with_parent(parent)  # in a SubprocVecEnv worker: no orphan after a kill -9 of train-ppo
         env = HexapodEnv(
             terrain, sim=params.sim, cpg=params.cpg, sensors=params.sensors, task=task, randomize=randomize
         )
@@ -108,29 +121,84 @@ def policy_config(params: Params, encoder, observation_dim: int) -> dict[str, An
     }
 
 
-def training_signature(params: Params) -> str:
-    """Hash of everything a checkpoint depends on except the budget: resuming under other params is refused."""
-    return params_hash(params, ppo={"total_timesteps", "checkpoint_every", "report_dir"})
+def encoder_fingerprint(encoder_dir: str | Path) -> str:
+    """Hash of the exported encoder's files (`encoder*` in the folder): a retrained VAE is another encoder."""
+    digest = hashlib.sha256()
+    for path in sorted(Path(encoder_dir).glob("encoder*")):
+        if path.is_file():
+            digest.update(path.name.encode() + b"\0" + path.read_bytes() + b"\0")
+    return digest.hexdigest()[:16]
 
 
-def prepare_checkpoints(checkpoints: Path, signature: str, resume: bool) -> Path | None:
-    """The checkpoint to resume from: the newest one if `resume` and it was made under the same params.
+def training_signature(params: Params, encoder_dir: str | Path | None = None) -> str:
+    """Hash of everything a checkpoint depends on except the budget (params, code and, unless blind, the encoder's
+    files): resuming under anything else is refused. The budget is left out so a longer run extends a shorter one;
+    `prepare_checkpoints` makes sure a shorter one never reuses a longer one."""
+    base = params_hash(params, ppo={"total_timesteps", "checkpoint_every", "report_dir"})
+    return base if encoder_dir is None else f"{base}-{encoder_fingerprint(encoder_dir)}"
 
-    Otherwise the folder is emptied and stamped with this run's signature, so a later --resume can trust it.
-    """
+
+def prepare_checkpoints(checkpoints: Path, signature: str, resume: bool, budget: int) -> list[Path]:
+    """The checkpoints `--resume` may continue from, newest first: made under the same signature and at or below
+    `budget` timesteps (the steps a run of ppo.total_timesteps ends at, a whole number of rollouts).
+    When there are none, the folder is emptied and stamped with this run's signature, so a later --resume can trust
+    it, and the run starts over."""
     marker = checkpoints / "signature.txt"
-    if resume and marker.is_file() and marker.read_text().strip() == signature:
-        found = latest_checkpoint(checkpoints)
-        if found is not None:
-            return found
+    if resume:
+        same = marker.is_file() and marker.read_text().strip() == signature
+        usable = complete_checkpoints(checkpoints, at_most=budget) if same else []
+        if usable:
+            return usable
+        if not same and complete_checkpoints(checkpoints):
+            say(f"train-ppo: the checkpoints in {checkpoints} were made under other params, code or encoder; "
+                "starting over")
+        elif same and complete_checkpoints(checkpoints):
+            say(f"train-ppo: every checkpoint in {checkpoints} is beyond this run's {budget} steps (a shorter budget "
+                "never reuses a longer run); starting over")
     shutil.rmtree(checkpoints, ignore_errors=True)
     checkpoints.mkdir(parents=True)
-    marker.write_text(signature + "\n")
+    write_text(marker, signature + "\n")
+    return []
+
+
+def say(message: str) -> None:
+    """A one-line note to stderr (beside the progress bar)."""
+    from rich.console import Console
+
+    Console(stderr=True).print(message, highlight=False, soft_wrap=True)
+
+
+def load_checkpoint(candidates: list[Path], venv: VecEnv) -> tuple[PPO, VecNormalize, Path] | None:
+    """The newest candidate that loads; a corrupt one (a torn disk, a hand edit) is skipped with a note, so an
+    interrupted run falls back to the checkpoint before it. None when none loads."""
+    for i, path in enumerate(candidates):
+        try:
+            normalised = VecNormalize.load(str(path / NORMALISATION), venv)
+            model = PPO.load(path / MODEL, env=normalised, device="cpu")
+        except Exception as exc:  # any failure to load means: not this one
+            later = f"falling back to {candidates[i + 1].name}" if i + 1 < len(candidates) else "starting over"
+            say(f"train-ppo: checkpoint {path} is unreadable ({type(exc).__name__}); {later}")
+            continue
+        return model, normalised, path
     return None
 
 
+def _finished(out_dir: Path, signature: str, steps: int) -> bool:
+    """Whether out_dir's policy is the one this signature's run saved at `steps` (so there is nothing to do)."""
+    try:
+        config = json.loads((out_dir / POLICY_CONFIG).read_text())
+    except (OSError, ValueError):
+        return False
+    exported = (out_dir / "policy" / MODEL).is_file()
+    return exported and config.get("signature") == signature and config.get("timesteps") == steps
+
+
 def train_ppo(params: Params, resume: bool = False, show_progress: bool = True) -> dict[str, Any]:
-    """Train, checkpointing as it goes; returns the final metrics (also written by dvclive)."""
+    """Train, checkpointing as it goes; returns the final metrics (also written by dvclive).
+
+    With `resume`, continues from the newest loadable checkpoint made under the same signature at or below
+    ppo.total_timesteps. A run that already reached the budget is a no-op: `{"finished": True, "timesteps": n}`.
+    """
     import torch
     from dvclive import Live
 
@@ -141,14 +209,24 @@ def train_ppo(params: Params, resume: bool = False, show_progress: bool = True) 
     out_dir, report_dir = Path(cfg.out_dir), Path(cfg.report_dir)
     checkpoints = out_dir / "checkpoints"
     encoder = load_terrain_encoder(params)
+    signature = training_signature(params, None if encoder is None else cfg.encoder_dir)
+    rollout = cfg.n_steps * cfg.n_envs  # PPO stops at the first whole rollout at or past the budget
+    reach = -(-cfg.total_timesteps // rollout) * rollout
+    candidates = prepare_checkpoints(checkpoints, signature, resume, reach)
+    newest = checkpoint_step(candidates[0]) if candidates else 0
+    if newest >= cfg.total_timesteps and _finished(out_dir, signature, newest):
+        return {"finished": True, "timesteps": newest}
     sensors = () if encoder is None else (encoder.modality,)
     clock = EnvClock(make_vec_env(params, cfg.train_terrains, cfg.n_envs, sensors, cfg.randomize, cfg.seed))
     venv = wrap_features(clock, encoder, params)
 
-    start_from = prepare_checkpoints(checkpoints, training_signature(params), resume)
-    if start_from is not None:
-        venv = VecNormalize.load(str(start_from / NORMALISATION), venv)
-        model = PPO.load(start_from / MODEL, env=venv, device="cpu")
+    loaded = load_checkpoint(candidates, venv) if candidates else None
+    if loaded is None and candidates:  # none loads: start over in a clean, re-stamped folder
+        prepare_checkpoints(checkpoints, signature, False, reach)
+    start_from = None if loaded is None else loaded[2]
+    if loaded is not None:
+        model, venv = loaded[0], loaded[1]
+        say(f"train-ppo: resuming from {start_from} ({model.num_timesteps} of {cfg.total_timesteps} steps)")
     else:
         venv = VecNormalize(venv, norm_obs=True, norm_reward=True, clip_obs=10.0, gamma=cfg.gamma)
         model = PPO(
@@ -170,21 +248,22 @@ def train_ppo(params: Params, resume: bool = False, show_progress: bool = True) 
     started, start_steps = time.perf_counter(), model.num_timesteps
     if remaining > 0:
         model.learn(remaining, callback=callbacks, reset_num_timesteps=start_from is None)
-    train_rate = (model.num_timesteps - start_steps) / max(time.perf_counter() - started, 1e-9)
+    taken = model.num_timesteps - start_steps
     save_checkpoint(model, checkpoints)
     save_policy(model, out_dir / "policy")
     export_weights(model, out_dir / "policy")  # what evaluate and play load: tensors and JSON, no pickle
     config = policy_config(params, encoder, int(venv.observation_space.shape[0]))
-    tmp = out_dir / (POLICY_CONFIG + ".tmp")
-    tmp.write_text(json.dumps(config, indent=2) + "\n")
-    tmp.replace(out_dir / POLICY_CONFIG)
+    write_json(out_dir / POLICY_CONFIG, {**config, "signature": signature, "timesteps": int(model.num_timesteps)})
 
+    # rates only when steps were taken now (a resume at the budget just re-exports the policy)
+    train_rate = taken / max(time.perf_counter() - started, 1e-9) if taken else None
+    bare_rate = clock.steps_per_s if clock.steps else None
     metrics = {
         **stats.recent(),
         "timesteps": model.num_timesteps,
         "time/train_steps_per_s": train_rate,
-        "time/bare_env_steps_per_s": clock.steps_per_s,
-        "time/train_vs_bare": train_rate / clock.steps_per_s,
+        "time/bare_env_steps_per_s": bare_rate,
+        "time/train_vs_bare": train_rate / bare_rate if train_rate and bare_rate else None,
         "episode/timesteps_to_90pct_success": first_time_success_rate(stats.episodes, threshold=0.9, window=20),
     }
     for name, value in metrics.items():
@@ -219,10 +298,9 @@ def training_curve(episodes: list[dict[str, Any]], path: Path, window: int = 20)
     ax_r.set(xlabel="timesteps", ylabel="episode reward (100 x v_x summed)", title="Episode reward")
     ax_s.set(xlabel="timesteps", ylabel=f"success rate (last {window})", ylim=(-0.02, 1.02), title="Reaches 3 m")
     fig.tight_layout()
-    tmp = path.with_name(path.stem + ".tmp.png")
-    fig.savefig(tmp, dpi=110)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=110)
     plt.close(fig)
-    tmp.replace(path)
 
 
 def first_time_success_rate(episodes: list[dict[str, Any]], threshold: float, window: int) -> int | None:

@@ -39,7 +39,6 @@ from pathlib import Path
 from typing import Annotated, Any
 
 import numpy as np
-import yaml
 from pydantic import (
     BaseModel,
     BeforeValidator,
@@ -51,6 +50,8 @@ from pydantic import (
     model_validator,
 )
 
+from hexpipe.validation import format_validation_error, read_yaml, show
+
 Vec2 = tuple[float, float]
 Vec3 = tuple[float, float, float]
 Rgba = tuple[float, float, float, float]
@@ -60,7 +61,12 @@ SOIL: Rgba = (0.45, 0.4, 0.3, 1.0)  # height fields
 GREY: Rgba = (0.6, 0.6, 0.6, 1.0)  # ground plane
 GROUND_HALF_EXTENT = 20.0  # the ground plane is a 40 m x 40 m static box centred on the origin (m)
 GROUND_THICKNESS = 0.1  # (m); its top is z = 0
-MAX_GRID_NODES = 4_000_000  # refuse height fields larger than this (memory and build time)
+# Bounds on what a terrain file may ask for, so that a typo gives an error instead of a hang or an OOM kill.
+MAX_GRID_NODES = 250_000  # height-field nodes: PyBullet builds 1M nodes in ~6 s, 4M in ~40 s (at every reset)
+MAX_NOISE_WORK = 200_000_000  # rough: padded noise nodes x Gaussian kernel taps (~1 s of NumPy, ~32 MB)
+MAX_BOXES = 200  # boxes of one terrain, all parts together: each step's height map tests every box
+MAX_VALUE = 1000.0  # every number of a terrain file (m, rad or friction) within +-this: PyBullet needs sane sizes
+MAX_RANDOM_TRIES = 64  # random_blocks: depth draws per block count before trying one block fewer
 
 
 class TerrainError(ValueError):
@@ -467,8 +473,10 @@ def random_blocks(
     """
     n = int(rng.integers(count[0], count[1] + 1))
     span = face[1] - face[0]
+    if depth[0] + gap > 0:  # no more blocks than fit at their shortest: keeps the loop below short
+        n = min(n, 1 + math.floor(max(span, 0.0) / (depth[0] + gap)))
     while n > 0:
-        for _ in range(64):
+        for _ in range(MAX_RANDOM_TRIES):
             depths = rng.uniform(depth[0], depth[1], n)
             slack = span - float(depths[:-1].sum()) - gap * (n - 1)  # free room for the faces
             if slack >= 0:
@@ -529,11 +537,12 @@ def varied(
 
 
 def _is_number(v: Any) -> bool:
-    return isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
+    return isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v) and abs(v) <= MAX_VALUE
 
 
 def _numbers(n: int, positive: bool = False, unit: bool = False) -> BeforeValidator:
     kind = "positive numbers" if positive else "numbers in [0, 1]" if unit else "numbers"
+    kind += f" (|x| <= {MAX_VALUE:g})" if not unit else ""
 
     def check(value: Any) -> tuple[float, ...]:
         ok = isinstance(value, list | tuple) and len(value) == n and all(_is_number(v) for v in value)
@@ -542,39 +551,40 @@ def _numbers(n: int, positive: bool = False, unit: bool = False) -> BeforeValida
         if ok and unit:
             ok = all(0 <= v <= 1 for v in value)
         if not ok:
-            raise ValueError(f"expected {n} {kind}, got {_show(value)}")
+            raise ValueError(f"expected {n} {kind}, got {show(value)}")
         return tuple(float(v) for v in value)
 
     return BeforeValidator(check)
 
 
-def _range(integer: bool = False, positive: bool = False, strict: bool = False) -> BeforeValidator:
+def _range(
+    integer: bool = False, positive: bool = False, strict: bool = False, upper: float = math.inf
+) -> BeforeValidator:
     kind = "integers >= 0" if integer else "positive numbers" if positive else "numbers"
+    kind += f" <= {upper:g}" if upper < math.inf else f" (|x| <= {MAX_VALUE:g})"
     order = "<" if strict else "<="
 
     def check(value: Any) -> tuple[float, float] | tuple[int, int]:
         ok = isinstance(value, list | tuple) and len(value) == 2 and all(_is_number(v) for v in value)
         if ok and integer:
             ok = all(isinstance(v, int) and v >= 0 for v in value)
+        if ok:
+            ok = all(v <= upper for v in value)
         if ok and positive:
             ok = all(v > 0 for v in value)
         if ok:
             ok = value[0] < value[1] if strict else value[0] <= value[1]
         if not ok:
-            raise ValueError(f"expected [low, high] of {kind} with low {order} high, got {_show(value)}")
+            raise ValueError(f"expected [low, high] of {kind} with low {order} high, got {show(value)}")
         return (int(value[0]), int(value[1])) if integer else (float(value[0]), float(value[1]))
 
     return BeforeValidator(check)
 
 
-def _show(value: Any) -> str:
-    return repr(list(value)) if isinstance(value, tuple) else repr(value)
-
-
 # Strict scalars: YAML strings such as "0.1" or booleans are errors, ints are fine where floats are expected.
-Num = Annotated[float, Field(strict=True, allow_inf_nan=False)]
-Pos = Annotated[float, Field(strict=True, gt=0, allow_inf_nan=False)]
-NonNeg = Annotated[float, Field(strict=True, ge=0, allow_inf_nan=False)]
+Num = Annotated[float, Field(strict=True, ge=-MAX_VALUE, le=MAX_VALUE, allow_inf_nan=False)]
+Pos = Annotated[float, Field(strict=True, gt=0, le=MAX_VALUE, allow_inf_nan=False)]
+NonNeg = Annotated[float, Field(strict=True, ge=0, le=MAX_VALUE, allow_inf_nan=False)]
 
 
 class _Spec(BaseModel):
@@ -619,7 +629,16 @@ class RoughSpec(_Spec):
         if min(nx, ny) < 2:
             raise ValueError(f"cell {self.cell} is larger than the field; need at least 2 nodes per axis")
         if nx * ny > MAX_GRID_NODES:
-            raise ValueError(f"cell {self.cell} gives {nx}x{ny} nodes; at most {MAX_GRID_NODES} allowed")
+            raise ValueError(
+                f"cell {self.cell} gives {nx}x{ny} nodes; at most {MAX_GRID_NODES} allowed (raise cell or shrink x, y)"
+            )
+        r = max(1, math.ceil(3 * self.smoothing / self.cell))  # the noise kernel's radius in cells (_smooth_noise)
+        work = (nx + 2 * r) * (ny + 2 * r) * (2 * r + 1)
+        if work > MAX_NOISE_WORK:
+            raise ValueError(
+                f"smoothing {self.smoothing} m is {self.smoothing / self.cell:.0f} cells of {self.cell} m: the noise "
+                f"filter would need {work:.2g} operations (at most {MAX_NOISE_WORK:.0e}); lower smoothing or raise cell"
+            )
         return self
 
 
@@ -637,7 +656,7 @@ class StairsSpec(_Spec):
 class RandomBlocksSpec(_Spec):
     """Domain randomisation; see `random_blocks`."""
 
-    count: Annotated[tuple[int, int], _range(integer=True)] = (1, 3)
+    count: Annotated[tuple[int, int], _range(integer=True, upper=MAX_BOXES)] = (1, 3)
     height: Annotated[Vec2, _range(positive=True)] = (0.06, 0.12)
     depth: Annotated[Vec2, _range(positive=True)] = (0.2, 1.0)
     face: Annotated[Vec2, _range()] = (0.8, 2.6)
@@ -673,7 +692,7 @@ class VariedSpec(_Spec):
         )
         for key, ok, allowed in checks:
             if not ok:
-                raise ValueError(f"{key}: expected {allowed}, got {_show(getattr(self, key))}")
+                raise ValueError(f"{key}: expected {allowed}, got {show(getattr(self, key))}")
         return self
 
 
@@ -697,6 +716,14 @@ class TerrainRecipe(_Spec):
     stairs: StairsSpec | None = None
     random_blocks: RandomBlocksSpec | None = None
     varied: VariedSpec | None = None
+
+    @model_validator(mode="after")
+    def _few_enough_boxes(self) -> TerrainRecipe:
+        most = len(self.boxes) + (self.stairs.steps if self.stairs else 0)
+        most += self.random_blocks.count[1] if self.random_blocks else 0
+        if most > MAX_BOXES:
+            raise ValueError(f"up to {most} boxes (boxes + stairs.steps + random_blocks.count); at most {MAX_BOXES}")
+        return self
 
 
 def realize(recipe: TerrainRecipe, rng: np.random.Generator, difficulty: float | None = None) -> Terrain:
@@ -749,44 +776,7 @@ SCENARIOS: dict[str, TerrainRecipe] = {
 }
 
 
-_SECTION_MODELS: dict[str, type[BaseModel]] = {
-    "rough": RoughSpec,
-    "stairs": StairsSpec,
-    "random_blocks": RandomBlocksSpec,
-    "varied": VariedSpec,
-    "box": BoxSpec,
-    "block": BlockSpec,
-}
-
-
-def _format_error(exc: ValidationError, source: str) -> str:
-    """One line: file, entry path like boxes[1].size, and what is wrong."""
-    err = exc.errors()[0]
-    parts: list[str] = []
-    model: type[BaseModel] = TerrainRecipe
-    for i, part in enumerate(err["loc"]):
-        if isinstance(part, int):
-            parts[-1] += f"[{part}]"
-        elif i > 0 and isinstance(err["loc"][i - 1], int) and part in ("box", "block"):
-            model = _SECTION_MODELS[part]  # the discriminator's tag, not a key the user wrote
-        else:
-            if part in _SECTION_MODELS and not parts:
-                model = _SECTION_MODELS[part]
-            parts.append(str(part))
-    key = ".".join(parts)
-    if err["type"] == "extra_forbidden":
-        allowed = ", ".join(sorted(model.model_fields))
-        return f"{source}: unknown key '{key}'; allowed here: {allowed}"
-    where = f"{key}: " if key else ""
-    if err["type"] == "value_error":
-        return f"{source}: {where}{err['ctx']['error']}"
-    given = err.get("input")
-    if err["type"] in ("model_type", "dict_type"):
-        return f"{source}: {where}expected a mapping of keys, got {_show(given)}"
-    if err["type"] in ("tuple_type", "list_type"):
-        return f"{source}: {where}expected a list, got {_show(given)}"
-    shown = "" if isinstance(given, dict) or err["type"] == "missing" else f" (got {_show(given)})"
-    return f"{source}: {where}{err['msg']}{shown}"
+_TAGS: dict[str, type[BaseModel]] = {"box": BoxSpec, "block": BlockSpec}  # tags of the boxes union
 
 
 def parse_recipe(data: Any, source: str = "terrain", default_name: str = "terrain") -> TerrainRecipe:
@@ -798,7 +788,7 @@ def parse_recipe(data: Any, source: str = "terrain", default_name: str = "terrai
     try:
         return TerrainRecipe.model_validate(data)
     except ValidationError as exc:
-        raise TerrainError(_format_error(exc, source)) from None
+        raise TerrainError(format_validation_error(exc, TerrainRecipe, source, tags=_TAGS)) from None
 
 
 def load_terrain(name_or_path: str | Path) -> TerrainRecipe:
@@ -812,15 +802,7 @@ def load_terrain(name_or_path: str | Path) -> TerrainRecipe:
         raise TerrainError(f"unknown terrain '{text}'; valid names: {names} (or a path to a .yaml file)")
     if not path.is_file():
         raise TerrainError(f"{text}: terrain file not found")
-    try:
-        data = yaml.safe_load(path.read_text())
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f" line {mark.line + 1}:" if mark else ""
-        problem = " ".join(str(getattr(exc, "problem", None) or exc).split())
-        raise TerrainError(f"{text}:{where} not valid YAML ({problem})") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise TerrainError(f"{text}: cannot read ({exc.__class__.__name__})") from None
+    data = read_yaml(path, TerrainError, source=text)
     return parse_recipe(data, source=text, default_name=path.stem)
 
 
