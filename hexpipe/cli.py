@@ -186,6 +186,55 @@ def bench(
     console.print(f"wrote {out}")
 
 
+@app.command()
+def sweep(
+    params: ParamsOpt = Path("params.yaml"),
+    set_: SetOpt = None,
+    name: Annotated[str | None, typer.Option(help="sweep name (sweep.name): the output folders")] = None,
+    seeds: Annotated[str | None, typer.Option(help="comma-separated training seeds (sweep.seeds)")] = None,
+    condition: Annotated[list[str] | None, typer.Option(
+        "--condition", help="NAME:section.key=value;section.key=value (repeatable; replaces sweep.conditions)")] = None,
+    compare: Annotated[list[str] | None, typer.Option(
+        "--compare", help="A,B: report P(A beats B) (repeatable; replaces sweep.compare)")] = None,
+    cpus: Annotated[int | None, typer.Option(min=0, help="CPUs of the local Ray cluster (0 = all)")] = None,
+    address: Annotated[str | None, typer.Option(
+        help="join this Ray cluster (host:port or 'auto'; default $RAY_ADDRESS, else start a local one)")] = None,
+    dry_run: Annotated[bool, typer.Option("--dry-run", help="list the trials and exit")] = False,
+) -> None:
+    """Train and evaluate every condition x seed of the `sweep:` params on Ray; report success with intervals."""
+    import json
+    import shlex
+    import sys
+
+    from hexpipe.config import apply_overrides
+    from hexpipe.sweep.grid import expand, parse_condition
+    from hexpipe.sweep.run import run_sweep
+
+    cfg = load(params, set_)
+    extra = [f"sweep.name={name}"] if name is not None else []
+    with user_errors():
+        if seeds is not None:
+            extra.append(f"sweep.seeds=[{seeds}]")
+        if condition:
+            extra.append(f"sweep.conditions={json.dumps(dict(parse_condition(c) for c in condition))}")
+        if compare:
+            extra.append(f"sweep.compare={json.dumps([c.split(',') for c in compare])}")
+        cfg = apply_overrides(cfg, extra, source="hexpipe sweep") if extra else cfg
+        if dry_run:
+            for trial in expand(cfg):
+                console.print(f"{trial.name}: {' '.join(trial.overrides) or '(no overrides)'}; {trial.cpus} CPUs")
+            return
+        try:
+            outcome, out_dir = run_sweep(cfg, shlex.join(["hexpipe", *sys.argv[1:]]), address=address, cpus=cpus,
+                                         log=lambda text: console.print(text, highlight=False))
+        except ConnectionError as exc:
+            raise ConfigError(f"cannot reach the Ray cluster at {address or 'RAY_ADDRESS'}: {exc}") from None
+    console.print(f"sweep: {len(outcome.results)} trials complete ({len(outcome.ran)} run now, "
+                  f"{len(outcome.skipped)} kept), {len(outcome.failures)} failed; report: {out_dir / 'report.md'}")
+    if outcome.failures:
+        raise typer.Exit(1)
+
+
 def main() -> None:  # pragma: no cover - console entry point
     app()
 

@@ -39,7 +39,6 @@ from hexpipe.evaluation.metrics import Table, rank_gaits, summarise
 from hexpipe.evaluation.report import ReportInputs, write_reports
 from hexpipe.evaluation.suite import Scenario, evaluation_suite, training_suite
 
-WORKERS = 2  # worker processes, one env each
 GRID_SEEDS = 3  # episodes per gait and training terrain in the best_fixed search
 TRACES = "cpg_traces.csv.gz"
 # Param sections evaluate reads (as dvc.yaml lists them); the reconstructed command overrides only these.
@@ -72,7 +71,7 @@ def _run_pool(
     """Run `jobs` in the worker pool; when the last grid job finishes, also run `best_fixed_jobs(grid results)`."""
     results: list[EpisodeResult] = []
     grid_left = sum(j.controller.name == GRID for j in jobs)
-    with ProcessPoolExecutor(max_workers=WORKERS, mp_context=get_context("fork")) as pool:
+    with ProcessPoolExecutor(max_workers=params.eval.workers, mp_context=get_context("fork")) as pool:
         pending: dict[Future, EpisodeJob] = {pool.submit(run_episode, params, j): j for j in jobs}
         try:
             while pending:
@@ -234,7 +233,7 @@ def _report_inputs(
             "episodes per terrain and controller": cfg.episodes, "seeds": f"{cfg.seed}..{cfg.seed + cfg.episodes - 1}",
             "goal": f"{params.task.goal_distance} m", "time limit": f"{params.task.time_limit} s",
             "best_fixed search": f"{grid_cells} (gait, training terrain) pairs x {GRID_SEEDS} seeds",
-            "wall time": f"{wall:.0f} s with {WORKERS} workers",
+            "wall time": f"{wall:.0f} s with {cfg.workers} workers",
         },
         grid=chosen["grid"], best_gait=gait_label(chosen["gait"]), first_policy_episodes=first,
         cpg_initial=params.cpg.initial, goal_distance=params.task.goal_distance,
