@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Annotated, Any, Literal
 
 import yaml
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 Triple = tuple[float, float, float]
 PositiveInt = Annotated[int, Field(ge=1)]
@@ -232,12 +232,17 @@ class SweepConfig(_Section):
     data_dir: str = "data/sweeps"
     report_dir: str = "reports/sweeps"
 
+    @field_validator("seeds")
+    @classmethod
+    def _distinct(cls, seeds: tuple[int, ...]) -> tuple[int, ...]:
+        if len(set(seeds)) != len(seeds):
+            raise ValueError(f"duplicate seeds in {list(seeds)}")
+        return seeds
+
     @model_validator(mode="after")
     def _conditions_known(self) -> SweepConfig:
         if not self.conditions:
             raise ValueError("conditions is empty: name at least one (e.g. default: [])")
-        if len(set(self.seeds)) != len(self.seeds):
-            raise ValueError(f"seeds has duplicates: {list(self.seeds)}")
         for pair in self.compare:
             for name in pair:
                 if name not in self.conditions:

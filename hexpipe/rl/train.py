@@ -17,8 +17,10 @@ from hexpipe.config import Params, params_hash
 from hexpipe.envs.hexapod import HexapodEnv
 from hexpipe.rl.checkpoint import MODEL, NORMALISATION, latest_checkpoint, save_checkpoint, save_policy
 from hexpipe.rl.features import TerrainFeatures
+from hexpipe.speed import SPEED_JSON, move_speed
 
 POLICY_CONFIG = "policy.json"
+PPO_SPEED = ("time",)  # dvclive's time/* metrics: steps per second, measured, not results
 
 
 def env_factory(params: Params, terrain: str, sensors: tuple[str, ...], randomize: bool) -> Callable[[], HexapodEnv]:
@@ -175,7 +177,8 @@ def train_ppo(params: Params, resume: bool = False, show_progress: bool = True) 
         "timesteps": model.num_timesteps,
         "time/train_steps_per_s": train_rate,
         "time/bare_env_steps_per_s": clock.steps_per_s,
-        "time/train_vs_bare": train_rate / clock.steps_per_s,
+        # None when resuming a run that had already reached total_timesteps: no step was timed
+        "time/train_vs_bare": train_rate / clock.steps_per_s if clock.steps else None,
         "episode/timesteps_to_90pct_success": first_time_success_rate(stats.episodes, threshold=0.9, window=20),
     }
     for name, value in metrics.items():
@@ -183,6 +186,7 @@ def train_ppo(params: Params, resume: bool = False, show_progress: bool = True) 
             live.log_metric(name, value, plot=False)
     live.make_summary()
     live.end()
+    move_speed(report_dir / "metrics.json", report_dir / SPEED_JSON, PPO_SPEED)  # results only in metrics.json
     training_curve(stats.episodes, report_dir / "training_curve.png")
     venv.close()
     return metrics

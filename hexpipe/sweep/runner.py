@@ -52,6 +52,11 @@ def format_seconds(seconds: float | None) -> str:
 
 def _connect(address: str | None, cpus: int) -> bool:
     """ray.init on a cluster (address) or a new local one; True if this call started Ray (so shuts it down)."""
+    if not address:
+        # A local cluster serves this machine only: with this set before Ray is imported, Ray binds its servers and
+        # the node's address to 127.0.0.1 instead of the machine's network address (Ray's switch for macOS/Windows,
+        # where clusters are off: on Linux it is the one that keeps a single-machine Ray off the network).
+        os.environ.setdefault("RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER", "0")
     import ray
 
     if ray.is_initialized():
@@ -92,10 +97,10 @@ def run_trials(
     if not pending:
         return out
 
-    import ray
-
     started = time.perf_counter()
     owns = _connect(address or os.environ.get("RAY_ADDRESS"), cpus)
+    import ray
+
     refs: dict[Any, Trial] = {}
     try:
         total_cpus = float(ray.cluster_resources().get("CPU", 0))
