@@ -68,6 +68,10 @@ def test_grid_expands_conditions_by_seeds_and_refuses_owned_keys(tmp_path):
     assert trials[1].params.eval.report_dir == str(tmp_path / "reports" / "g" / "a-seed4" / "eval")
     assert not trials[0].params.eval.record_video and trials[0].params.eval.log_episodes == 0
     assert len({t.key for t in trials}) == 4 and trials[0].cpus == 1
+    same = expand(load_params(ROOT / "params.yaml", [*sets(tmp_path, "sweep.name=g", "sweep.seeds=[3, 4]",
+                                                          "sweep.conditions={a: [], b: [ppo.blind=true]}"),
+                                                     "sweep.resamples=500", "sweep.cpus=7"]))
+    assert [t.key for t in same] == [t.key for t in trials]  # statistics settings do not invalidate trials
     assert parse_condition("x:ppo.blind=true; task.power_cost=0.1") == ("x", ("ppo.blind=true",
                                                                                "task.power_cost=0.1"))
     assert parse_condition("default") == ("default", ())

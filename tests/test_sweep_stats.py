@@ -130,6 +130,8 @@ def test_report_files_are_complete_and_metrics_hold_numbers_only(tmp_path):
     assert set(results["terrain"]) == {"flat", "block", "all"} and "success_iqm_low" in results
     text = (tmp_path / "report.md").read_text()
     assert "good > bad" in text and "pareto_flat.png" in text and "Wilson" in text
+    assert "| block | bad | 0.08 [0.01, 0.35] |" in text  # Wilson for 1 of 12
+    assert "| 12.0 (1 seed) |" in text  # one seed of `bad` reached the goal on the block: no interval
     for name in ("success.png", "pareto_flat.png", "episodes.csv", "per_seed.csv", "trials.csv"):
         assert (tmp_path / name).stat().st_size > 0
     assert not list(tmp_path.glob(".*tmp*"))

@@ -30,8 +30,10 @@ class Trial:
 
     @property
     def key(self) -> str:
-        """Hash of every param the trial runs under: a stored result is reused only under the same key."""
-        return hashlib.sha256(json.dumps(self.params.model_dump(mode="json"), sort_keys=True).encode()).hexdigest()[:16]
+        """Hash of every param the trial runs under (the sweep's own section aside: its statistics settings and
+        --cpus do not change a trial): a stored result is reused only under the same key."""
+        dump = self.params.model_dump(mode="json", exclude={"sweep"})
+        return hashlib.sha256(json.dumps(dump, sort_keys=True).encode()).hexdigest()[:16]
 
     @property
     def cpus(self) -> int:

@@ -69,7 +69,8 @@ def plot_success(report: SweepReport, path: Path) -> None:
         seeds = report.per_seed[report.per_seed["condition"] == condition]
         for xi, terrain in zip(x, terrains, strict=True):
             rates = seeds.loc[seeds["terrain"] == terrain, "success"].to_numpy(float)
-            ax.scatter(np.full(len(rates), xi), rates, s=10, color="black", zorder=3)
+            ax.scatter(np.full(len(rates), xi + width / 4), rates, s=12, color="black", edgecolors="white",
+                       linewidths=0.5, zorder=3)
     ax.set_xticks(centres, terrains)
     ax.set_ylim(-0.02, 1.1)
     ax.set_ylabel("success rate")
@@ -101,6 +102,7 @@ def plot_pareto(report: SweepReport, path: Path) -> list[str]:
     if len(front) > 1:
         ordered = sorted(front, key=lambda c: points[c][1])
         ax.plot([points[c][1] for c in ordered], [points[c][0] for c in ordered], "k--", lw=1, label="Pareto front")
+    ax.margins(0.15)
     ax.set_xlabel("cost of transport (episodes that reach the goal)")
     ax.set_ylabel("success rate (mean over seeds)")
     ax.set_title(f"{flat}: more success for less energy is up and to the left ({report.confidence:.0%} intervals)",
@@ -112,11 +114,16 @@ def plot_pareto(report: SweepReport, path: Path) -> list[str]:
 
 
 def _fmt(cell: Cell, key: str, spec: str) -> str:
+    """'value [low, high]', or the value alone where no interval exists; '(k seeds)' when fewer seeds than the cell
+    has contributed (time and energy count only the seeds with an episode that reached the goal)."""
     if key not in cell:
         return "-"
     value = format(cell[key], spec)
     if f"{key}_low" in cell:
-        return f"{value} [{format(cell[f'{key}_low'], spec)}, {format(cell[f'{key}_high'], spec)}]"
+        value = f"{value} [{format(cell[f'{key}_low'], spec)}, {format(cell[f'{key}_high'], spec)}]"
+    if f"{key}_seeds" in cell and cell[f"{key}_seeds"] < cell.get("seeds", 0):
+        n = cell[f"{key}_seeds"]
+        value += f" ({n} seed{'s' if n != 1 else ''})"
     return value
 
 

@@ -7,6 +7,7 @@ once as its CPUs allow. The driver only submits, waits, and writes each record t
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import math
 import os
@@ -118,8 +119,9 @@ def run_trials(
             refs[ref] = trial
         _wait_all(params, refs, out, total_cpus, len(trials), show_progress, log)
     except BaseException:
-        for ref in refs:
-            ray.cancel(ref, force=True)
+        for ref in refs:  # Ctrl-C or an error: stop the trials still queued or running
+            with contextlib.suppress(Exception):
+                ray.cancel(ref, force=True)
         raise
     finally:
         out.wall = time.perf_counter() - started
@@ -142,6 +144,13 @@ def _wait_all(
     bar = Progress("[bold]sweep", BarColumn(), MofNCompleteColumn(), TextColumn("{task.fields[state]}"),
                    TimeElapsedColumn(), console=Console(stderr=True), disable=not show_progress)
     job = bar.add_task("trials", total=n_trials, completed=len(out.skipped), state="")
+
+    def say(text: str) -> None:  # above the live progress bar, not through it
+        if show_progress:
+            bar.console.print(text, highlight=False, soft_wrap=True)
+        else:
+            log(text)
+
     with bar:
         while refs:
             done, _ = ray.wait(list(refs), num_returns=1, timeout=1.0)
@@ -152,7 +161,7 @@ def _wait_all(
                 except Exception as exc:  # the trial failed: record it, the others go on
                     error, details = _error_line(exc)
                     out.failures[trial.name] = save_failure(params, trial, error, details)
-                    log(f"sweep: {trial.name} failed: {error}")
+                    say(f"sweep: {trial.name} failed: {error}")
                 else:
                     record = {"trial": trial.name, "condition": trial.condition, "seed": trial.seed,
                               "overrides": list(trial.overrides), **record}
@@ -160,7 +169,7 @@ def _wait_all(
                     out.results[trial.name] = record
                     out.ran.append(trial.name)
                     seconds.append(record["seconds"]["total"])
-                    log(f"sweep: {trial.name} done in {format_seconds(record['seconds']['total'])}")
+                    say(f"sweep: {trial.name} done in {format_seconds(record['seconds']['total'])}")
             free = float(ray.available_resources().get("CPU", 0))
             running = min(len(refs), max(0, round((total_cpus - free) / per_trial)))
             state = (f"{running} running, {len(out.failures)} failed, "
