@@ -93,13 +93,15 @@ def writable(*folders: str | Path) -> None:
 def collect(
     params: ParamsOpt = Path("params.yaml"),
     set_: SetOpt = None,
-    report: Annotated[Path, typer.Option(help="JSON report")] = Path("reports/collect.json"),
+    report: Annotated[Path, typer.Option(help="JSON report (throughput beside it: NAME_speed.json)")] = Path(
+        "reports/collect.json"),
 ) -> None:
     """Random-policy rollouts over the terrain mix, logged to MCAP (RGB, height map, TF, scene, CPG, joints)."""
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn
 
-    from hexpipe.collect import check_manifest
+    from hexpipe.collect import SPEED_KEYS, check_manifest
     from hexpipe.collect import collect as run_collect
+    from hexpipe.speed import beside, split
 
     cfg = load(params, set_)
     writable(cfg.collect.out_dir, report.parent)
@@ -110,7 +112,9 @@ def collect(
         with user_errors():
             result = run_collect(cfg, on_episode=lambda done, total: bar.update(task, completed=done, total=total),
                                  say=lambda note: console.print(note, highlight=False, markup=False))
-    write_json(report, result)
+    results, speed = split(result, SPEED_KEYS)  # dvc metrics diff shows results, not timing noise
+    write_json(beside(report), speed)
+    write_json(report, results)
     rate = result.get("logging_rate_vs_bare")
     console.print(
         f"collect: {result['episodes']} episodes, {result['frames']} frames, {result['bytes'] / 1e6:.1f} MB in "
@@ -151,7 +155,8 @@ def train_ppo_cmd(
         return
     rate = metrics["time/train_steps_per_s"]
     speed = (f"{rate:.0f} steps/s ({metrics['time/train_vs_bare']:.0%} of the bare env's "
-             f"{metrics['time/bare_env_steps_per_s']:.0f})" if rate else "no steps taken now (policy re-exported)")
+             f"{metrics['time/bare_env_steps_per_s']:.0f})" if rate and metrics.get("time/train_vs_bare") is not None
+             else "no steps taken now (policy re-exported)")
     console.print(
         f"train-ppo: {metrics['timesteps']} steps, success {metrics.get('episode/success_rate', 0):.0%} "
         f"(last 20 episodes), {speed}"
@@ -281,6 +286,55 @@ def bench(
             f"env's {t['bare_env_steps_per_s']:.0f} steps/s in the same run"
         )
     console.print(f"wrote {out}")
+
+
+@app.command()
+def sweep(
+    params: ParamsOpt = Path("params.yaml"),
+    set_: SetOpt = None,
+    name: Annotated[str | None, typer.Option(help="sweep name (sweep.name): the output folders")] = None,
+    seeds: Annotated[str | None, typer.Option(help="comma-separated training seeds (sweep.seeds)")] = None,
+    condition: Annotated[list[str] | None, typer.Option(
+        "--condition", help="NAME:section.key=value;section.key=value (repeatable; replaces sweep.conditions)")] = None,
+    compare: Annotated[list[str] | None, typer.Option(
+        "--compare", help="A,B: report P(A beats B) (repeatable; replaces sweep.compare)")] = None,
+    cpus: Annotated[int | None, typer.Option(min=0, help="CPUs of the local Ray cluster (0 = all)")] = None,
+    address: Annotated[str | None, typer.Option(
+        help="join this Ray cluster (host:port or 'auto'; default $RAY_ADDRESS, else start a local one)")] = None,
+    dry_run: Annotated[bool, typer.Option("--dry-run", help="list the trials and exit")] = False,
+) -> None:
+    """Train and evaluate every condition x seed of the `sweep:` params on Ray; report success with intervals."""
+    import json
+    import shlex
+    import sys
+
+    from hexpipe.config import apply_overrides
+    from hexpipe.sweep.grid import expand, parse_condition
+    from hexpipe.sweep.run import run_sweep
+
+    cfg = load(params, set_)
+    extra = [f"sweep.name={name}"] if name is not None else []
+    with user_errors():
+        if seeds is not None:
+            extra.append(f"sweep.seeds=[{seeds}]")
+        if condition:
+            extra.append(f"sweep.conditions={json.dumps(dict(parse_condition(c) for c in condition))}")
+        if compare:
+            extra.append(f"sweep.compare={json.dumps([c.split(',') for c in compare])}")
+        cfg = apply_overrides(cfg, extra, source="hexpipe sweep") if extra else cfg
+        if dry_run:
+            for trial in expand(cfg):
+                console.print(f"{trial.name}: {' '.join(trial.overrides) or '(no overrides)'}; {trial.cpus} CPUs")
+            return
+        try:
+            outcome, out_dir = run_sweep(cfg, shlex.join(["hexpipe", *sys.argv[1:]]), address=address, cpus=cpus,
+                                         log=lambda text: console.print(text, highlight=False))
+        except ConnectionError as exc:
+            raise ConfigError(f"cannot reach the Ray cluster at {address or 'RAY_ADDRESS'}: {exc}") from None
+    console.print(f"sweep: {len(outcome.results)} trials complete ({len(outcome.ran)} run now, "
+                  f"{len(outcome.skipped)} kept), {len(outcome.failures)} failed; report: {out_dir / 'report.md'}")
+    if outcome.failures:
+        raise typer.Exit(1)
 
 
 def main() -> None:  # pragma: no cover - console entry point

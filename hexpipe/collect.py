@@ -190,6 +190,11 @@ def collect(
     return collect_report(list(done.values()), ran, wall, cfg.workers)
 
 
+# throughput of the episodes run now: measured, not results (they go to reports/collect_speed.json)
+SPEED_KEYS = ("wall_seconds", "frames_per_s", "env_steps_per_s_per_worker", "bare_env_steps_per_s",
+              "logging_rate_vs_bare")
+
+
 def collect_report(rows: list[dict[str, Any]], ran: list[dict[str, Any]], wall: float, workers: int) -> dict[str, Any]:
     """Dataset figures (all episodes) and throughput (the episodes run now) for reports/collect.json."""
     import pandas as pd

@@ -254,10 +254,53 @@ class EvalConfig(_Section):
     grid_omega: tuple[PositiveFloat, ...] = (1.0 * math.pi, 1.5 * math.pi, 2.0 * math.pi)
     record_video: bool = True
     log_episodes: Annotated[int, Field(ge=0)] = 2  # policy episodes per terrain logged to MCAP
+    workers: Annotated[int, Field(ge=1, le=256)] = 2  # episode worker processes, one env (about one core) each
     policy_dir: str = "data/models/ppo"
     blind_policy_dir: str = ""  # optional blind PPO (ppo.blind=true) compared as the `blind` controller
     out_dir: str = "data/eval"
     report_dir: str = "reports/eval"
+
+
+_NAME = r"^[A-Za-z0-9][A-Za-z0-9_-]*$"  # a folder name: no dots (DVC flattens metrics keys on them), no slashes
+
+
+class SweepConfig(_Section):
+    """`hexpipe sweep`: train-ppo + evaluate for every (condition, seed), on Ray, then statistics across seeds.
+
+    A condition is a name and a list of --set overrides applied to the params; each seed sets ppo.seed. Output
+    folders (ppo.*_dir, eval.*_dir) are set per trial and may not be overridden.
+    """
+
+    name: Annotated[str, Field(pattern=_NAME)] = "main"  # data_dir/NAME and report_dir/NAME
+    seeds: Annotated[tuple[int, ...], Field(min_length=1)] = (0, 1, 2)  # training seeds (ppo.seed)
+    conditions: dict[Annotated[str, Field(pattern=_NAME)], tuple[str, ...]] = {
+        "default": (), "blind": ("ppo.blind=true",),
+    }
+    compare: tuple[tuple[str, str], ...] = ()  # (a, b): P(a beats b); empty: every condition against the first
+    cpus: Annotated[int, Field(ge=0)] = 0  # CPUs of the local Ray cluster; 0 = all of this machine's
+    record: bool = False  # keep evaluate's videos and MCAP logs for every trial (eval.record_video, log_episodes)
+    flat_terrain: str = "flat"  # the terrain of the Pareto plot (success against cost of transport)
+    confidence: Annotated[float, Field(gt=0.5, lt=1)] = 0.95  # of every interval
+    resamples: Annotated[int, Field(ge=100)] = 10_000  # bootstrap resamples
+    data_dir: str = "data/sweeps"
+    report_dir: str = "reports/sweeps"
+
+    @field_validator("seeds")
+    @classmethod
+    def _distinct(cls, seeds: tuple[int, ...]) -> tuple[int, ...]:
+        if len(set(seeds)) != len(seeds):
+            raise ValueError(f"duplicate seeds in {list(seeds)}")
+        return seeds
+
+    @model_validator(mode="after")
+    def _conditions_known(self) -> SweepConfig:
+        if not self.conditions:
+            raise ValueError("conditions is empty: name at least one (e.g. default: [])")
+        for pair in self.compare:
+            for name in pair:
+                if name not in self.conditions:
+                    raise ValueError(f"compare names '{name}', not a condition ({', '.join(self.conditions)})")
+        return self
 
 
 class Params(_Section):
@@ -271,6 +314,7 @@ class Params(_Section):
     vae: VaeConfig = VaeConfig()
     ppo: PpoConfig = PpoConfig()
     eval: EvalConfig = EvalConfig()
+    sweep: SweepConfig = SweepConfig()
 
 
 def params_hash(params: Params, **stage_excludes: set[str]) -> str:
@@ -303,6 +347,18 @@ def parse_override(text: str) -> tuple[str, Any]:
         raise ConfigError(f"--set {text!r}: expected section.key=value")
     value = parse_yaml(raw, f"--set {key}", ConfigError) if raw.strip() else ""
     return key.strip(), value
+
+
+def apply_overrides(params: Params, overrides: list[str] | tuple[str, ...], source: str = "--set") -> Params:
+    """`params` with --set style overrides applied and validated again (ConfigError naming `source` and the key)."""
+    tree = params.model_dump(mode="json")
+    for text in overrides:
+        key, value = parse_override(text)
+        _set_dotted(tree, key, value)
+    try:
+        return Params.model_validate(tree)
+    except ValidationError as exc:
+        raise ConfigError(format_validation_error(exc, Params, source)) from None
 
 
 def load_params(path: str | Path = "params.yaml", overrides: list[str] | tuple[str, ...] = ()) -> Params:

@@ -130,6 +130,8 @@ def test_interrupted_collect_leaves_no_unreadable_file_and_rerun_completes(tmp_p
     assert rerun.returncode == 0, rerun.stderr.decode()[-2000:]
     report = json.loads((tmp_path / "collect.json").read_text())
     assert report["episodes"] == 6 and report.get("episodes_run_now", 0) == 6 - len(listed)
+    speed = json.loads((tmp_path / "collect_speed.json").read_text())
+    assert speed["frames_per_s"] > 0 and "frames_per_s" not in report  # timings apart from results
     assert not list(out.glob("*.tmp*")) and not list(out.glob(".*"))
 
 

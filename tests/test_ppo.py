@@ -70,7 +70,9 @@ def test_tiny_training_with_an_encoder_writes_policy_reports_and_checkpoints(tmp
     assert (tmp_path / "ppo" / "policy" / "model.zip").is_file()
     assert (tmp_path / "ppo" / "policy" / "vecnormalize.pkl").is_file()
     summary = json.loads((tmp_path / "reports" / "metrics.json").read_text())
-    assert 0 < summary["time"]["train_vs_bare"] < 1
+    speed = json.loads((tmp_path / "reports" / "speed.json").read_text())
+    assert 0 < speed["time"]["train_vs_bare"] < 1 and "time" not in summary  # results and timings apart
+    assert summary["step"] == 256 and "success_rate" in summary["episode"]
     assert (tmp_path / "reports" / "plots" / "metrics" / "time" / "steps_per_s.tsv").is_file()
 
 
@@ -80,6 +82,8 @@ def test_resume_continues_and_changed_params_start_over(tmp_path):
     longer = tiny(tmp_path, "ppo.blind=true", "ppo.n_envs=1", "ppo.total_timesteps=384")
     metrics = train_ppo(longer, resume=True, show_progress=False)
     assert metrics["timesteps"] == 384
+    again = train_ppo(longer, resume=True, show_progress=False)  # already at total_timesteps: nothing to time
+    assert again["timesteps"] == 384 and again["time/train_vs_bare"] is None
     ckpts = sorted(p.name for p in (tmp_path / "ppo" / "checkpoints").glob("step-*"))
     assert ckpts[-1] == "step-000000384"
     other = tiny(tmp_path, "ppo.blind=true", "ppo.n_envs=1", "ppo.learning_rate=0.001")

@@ -40,7 +40,6 @@ from hexpipe.evaluation.suite import Scenario, evaluation_suite, training_suite
 from hexpipe.paths import inside
 from hexpipe.workers import worker_pool
 
-WORKERS = 2  # worker processes, one env each
 GRID_SEEDS = 3  # episodes per gait and training terrain in the best_fixed search
 TRACES = "cpg_traces.csv.gz"
 # Param sections evaluate reads (as dvc.yaml lists them); the reconstructed command overrides only these.
@@ -73,7 +72,7 @@ def _run_pool(
     """Run `jobs` in the worker pool; when the last grid job finishes, also run `best_fixed_jobs(grid results)`."""
     results: list[EpisodeResult] = []
     grid_left = sum(j.controller.name == GRID for j in jobs)
-    with worker_pool(WORKERS, ignore_sigint=False) as pool:  # workers die with a killed evaluate
+    with worker_pool(params.eval.workers, ignore_sigint=False) as pool:  # workers die with a killed evaluate
         pending: dict[Future, EpisodeJob] = {pool.submit(run_episode, params, j): j for j in jobs}
         try:
             while pending:
@@ -235,7 +234,7 @@ def _report_inputs(
             "episodes per terrain and controller": cfg.episodes, "seeds": f"{cfg.seed}..{cfg.seed + cfg.episodes - 1}",
             "goal": f"{params.task.goal_distance} m", "time limit": f"{params.task.time_limit} s",
             "best_fixed search": f"{grid_cells} (gait, training terrain) pairs x {GRID_SEEDS} seeds",
-            "wall time": f"{wall:.0f} s with {WORKERS} workers",
+            "wall time": f"{wall:.0f} s with {cfg.workers} workers",
         },
         grid=chosen["grid"], best_gait=gait_label(chosen["gait"]), first_policy_episodes=first,
         cpg_initial=params.cpg.initial, goal_distance=params.task.goal_distance,

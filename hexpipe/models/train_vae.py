@@ -46,6 +46,7 @@ from hexpipe.models.vae import (
 from hexpipe.provenance import code_fingerprint
 from hexpipe.recording.manifest import MANIFEST, listed_files
 from hexpipe.recording.reader import Frame, RecordingError, iter_frames
+from hexpipe.speed import SPEED_JSON, move_speed
 
 CHECKPOINT = "checkpoint.pt"
 CHECKPOINT_VERSION = 1
@@ -681,6 +682,7 @@ def train_vae(cfg: VaeConfig, frames: Iterable[Frame] | None = None) -> dict[str
         if name not in _EPOCH_KEYS:
             live.log_metric(name, value, plot=False)
     live.end()
+    move_speed(report_dir / "metrics.json", report_dir / SPEED_JSON, ("train/images_per_s",))  # results only
     console.log(
         f"val loss {metrics['val/loss']:.2f} (recon {metrics['val/recon']:.2f}, KL {metrics['val/kl']:.2f}); "
         f"probe {probe_accuracy:.3f} vs baseline {probe_baseline:.3f} (threshold probe {threshold_accuracy:.3f}); "

@@ -30,9 +30,11 @@ from hexpipe.rl.checkpoint import (
 from hexpipe.rl.curriculum import Curriculum, CurriculumStats
 from hexpipe.rl.features import TerrainFeatures
 from hexpipe.rl.inference import export_weights
+from hexpipe.speed import SPEED_JSON, move_speed
 from hexpipe.workers import die_with_parent
 
 POLICY_CONFIG = "policy.json"
+PPO_SPEED = ("time",)  # dvclive's time/* metrics: steps per second, measured, not results
 
 
 def env_factory(params: Params, terrain: str, sensors: tuple[str, ...], randomize: bool) -> Callable[[], gym.Env]:
@@ -263,6 +265,7 @@ def train_ppo(params: Params, resume: bool = False, show_progress: bool = True) 
         "timesteps": model.num_timesteps,
         "time/train_steps_per_s": train_rate,
         "time/bare_env_steps_per_s": bare_rate,
+        # None when resuming a run that had already reached total_timesteps: no step was timed
         "time/train_vs_bare": train_rate / bare_rate if train_rate and bare_rate else None,
         "episode/timesteps_to_90pct_success": first_time_success_rate(stats.episodes, threshold=0.9, window=20),
     }
@@ -271,6 +274,7 @@ def train_ppo(params: Params, resume: bool = False, show_progress: bool = True) 
             live.log_metric(name, value, plot=False)
     live.make_summary()
     live.end()
+    move_speed(report_dir / "metrics.json", report_dir / SPEED_JSON, PPO_SPEED)  # results only in metrics.json
     training_curve(stats.episodes, report_dir / "training_curve.png")
     venv.close()
     return metrics

@@ -1,0 +1,79 @@
+"""The sweep's grid: conditions x seeds -> trials, each with the Params it trains and evaluates under.
+
+A trial's Params are the sweep's base params (params.yaml + --set) with the condition's overrides, ppo.seed set to
+the trial's seed, and every output folder moved under data_dir/NAME/TRIAL and report_dir/NAME/TRIAL.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+from hexpipe.config import ConfigError, Params, apply_overrides, parse_override
+
+# Set per trial by the sweep: a condition may not move them, or trials would overwrite each other.
+OWNED = ("ppo.seed", "ppo.out_dir", "ppo.report_dir", "eval.policy_dir", "eval.out_dir", "eval.report_dir")
+
+
+@dataclass(frozen=True)
+class Trial:
+    condition: str
+    seed: int
+    overrides: tuple[str, ...]  # the condition's --set overrides (the sweep adds seed, folders, recording)
+    params: Params
+
+    @property
+    def name(self) -> str:
+        return f"{self.condition}-seed{self.seed}"
+
+    @property
+    def key(self) -> str:
+        """Hash of every param the trial runs under (the sweep's own section aside: its statistics settings and
+        --cpus do not change a trial): a stored result is reused only under the same key."""
+        dump = self.params.model_dump(mode="json", exclude={"sweep"})
+        return hashlib.sha256(json.dumps(dump, sort_keys=True).encode()).hexdigest()[:16]
+
+    @property
+    def cpus(self) -> int:
+        """CPUs the trial reserves: its PPO env processes, or evaluate's workers if more."""
+        return max(self.params.ppo.n_envs, self.params.eval.workers)
+
+
+def trial_dirs(params: Params, name: str) -> tuple[Path, Path]:
+    """(data folder, report folder) of trial `name` of the sweep params.sweep.name."""
+    cfg = params.sweep
+    return Path(cfg.data_dir) / cfg.name / name, Path(cfg.report_dir) / cfg.name / name
+
+
+def parse_condition(text: str) -> tuple[str, tuple[str, ...]]:
+    """'blind:ppo.blind=true;task.power_cost=0.1' -> ('blind', (...)); 'default:' or 'default' -> no overrides."""
+    name, _, rest = text.partition(":")
+    overrides = tuple(o.strip() for o in rest.split(";") if o.strip())
+    if not name.strip():
+        raise ConfigError(f"--condition {text!r}: expected NAME:section.key=value;section.key=value")
+    return name.strip(), overrides
+
+
+def expand(params: Params) -> list[Trial]:
+    """Every (condition, seed) of params.sweep, condition-major, each validated (ConfigError names the condition)."""
+    cfg = params.sweep
+    trials = []
+    for condition, overrides in cfg.conditions.items():
+        for text in overrides:
+            key, _ = parse_override(text)
+            if key in OWNED or key.startswith("sweep."):
+                raise ConfigError(f"sweep condition '{condition}': {key} is set by the sweep for each trial")
+        for seed in cfg.seeds:
+            name = f"{condition}-seed{seed}"
+            data, report = trial_dirs(params, name)
+            own = [f"ppo.seed={seed}", f"ppo.out_dir={data / 'ppo'}", f"ppo.report_dir={report / 'ppo'}",
+                   f"eval.policy_dir={data / 'ppo'}", f"eval.out_dir={data / 'eval'}",
+                   f"eval.report_dir={report / 'eval'}"]
+            if not cfg.record:
+                own += ["eval.record_video=false", "eval.log_episodes=0"]
+            applied = (*overrides, *own)
+            trial_params = apply_overrides(params, applied, source=f"sweep condition '{condition}'")
+            trials.append(Trial(condition, seed, tuple(overrides), trial_params))
+    return trials

@@ -1,0 +1,70 @@
+"""`hexpipe sweep` end to end: expand the grid, run what is missing on Ray, then the statistics and the report."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+
+import pandas as pd
+
+from hexpipe.config import Params
+from hexpipe.sweep import tables
+from hexpipe.sweep.grid import Trial, expand
+from hexpipe.sweep.report import SweepReport, write_report
+from hexpipe.sweep.runner import Outcome, run_trials
+from hexpipe.sweep.store import load_failure
+
+
+def trials_frame(params: Params, trials: list[Trial], outcome: Outcome) -> pd.DataFrame:
+    rows = []
+    for trial in trials:
+        record = outcome.results.get(trial.name)
+        failure = outcome.failures.get(trial.name) or (None if record else load_failure(params, trial))
+        status = "ok" if record else "failed" if failure else "not run"
+        rows.append({"trial": trial.name, "condition": trial.condition, "seed": trial.seed, "status": status,
+                     "seconds": record["seconds"]["total"] if record else float("nan"),
+                     "host": record.get("host") if record else None, "node": record.get("node") if record else None,
+                     "code": record.get("code") if record else None,
+                     "error": failure["error"] if failure and not record else None})
+    return pd.DataFrame(rows)
+
+
+def build_report(params: Params, trials: list[Trial], outcome: Outcome, command: str) -> SweepReport:
+    cfg = params.sweep
+    records = [outcome.results[t.name] for t in trials if t.name in outcome.results]
+    episodes = tables.episodes_frame(records)
+    policy = episodes[episodes["controller"] == "policy"] if len(episodes) else episodes
+    seeds = tables.per_seed(policy)
+    terrains = list(dict.fromkeys(policy["terrain"])) if len(policy) else []
+    conditions = list(cfg.conditions)
+    args = (cfg.confidence, cfg.resamples)
+    table = tables.summarise(seeds, conditions, terrains, *args)
+    pairs = tables.default_pairs([c for c in conditions if c in table], cfg.compare) if table else []
+    trials_df = trials_frame(params, trials, outcome)
+    notes = []
+    missing = trials_df[trials_df["status"] != "ok"]
+    if len(missing):
+        notes.append(f"{len(missing)} of {len(trials_df)} trials have no result ({', '.join(missing['trial'])}): "
+                     "the statistics use the complete ones; rerun the same command to retry them.")
+    if len(set(trials_df["code"].dropna())) > 1:
+        notes.append("The trials ran under different hexpipe code (column `code` in trials.csv).")
+    if len(cfg.seeds) < 2:
+        notes.append("One seed: no interval over seeds can be computed (use sweep.seeds with at least 3).")
+    return SweepReport(
+        name=cfg.name, command=command, conditions=dict(cfg.conditions), seeds=cfg.seeds, terrains=terrains,
+        table=table, improvement=tables.improvements(seeds, pairs, terrains, *args), per_seed=seeds,
+        episodes=episodes, trials=trials_df, flat_terrain=cfg.flat_terrain, confidence=cfg.confidence, notes=notes,
+    )
+
+
+def run_sweep(
+    params: Params, command: str, address: str | None = None, cpus: int | None = None, show_progress: bool = True,
+    log: Callable[[str], None] = print,
+) -> tuple[Outcome, Path]:
+    """Run every trial of params.sweep that has no complete result, then write reports/sweeps/NAME."""
+    trials = expand(params)  # ConfigError before anything runs
+    outcome = run_trials(params, trials, address=address, cpus=params.sweep.cpus if cpus is None else cpus,
+                         root=Path.cwd(), show_progress=show_progress, log=log)
+    out_dir = Path(params.sweep.report_dir) / params.sweep.name
+    write_report(out_dir, build_report(params, trials, outcome, command))
+    return outcome, out_dir
