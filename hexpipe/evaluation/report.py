@@ -95,7 +95,7 @@ def plot_success(table: Table, terrains: Sequence[str], controllers: Sequence[st
     """Grouped bars: success rate per terrain, one bar per controller, with its 95% Wilson interval."""
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(max(6, (0.6 + 0.35 * len(controllers)) * len(terrains)), 4), layout="constrained")
+    fig = Figure(figsize=(min(12, max(6, 1.2 * len(terrains))), 4), layout="constrained")
     ax = fig.subplots()
     width = 0.8 / max(len(controllers), 1)
     centres = np.arange(len(terrains))
@@ -107,8 +107,8 @@ def plot_success(table: Table, terrains: Sequence[str], controllers: Sequence[st
         bars = ax.bar(centres + (k - (len(controllers) - 1) / 2) * width, rates, width, label=controller,
                       yerr=errors, error_kw={"elinewidth": 0.8, "capsize": 2, "ecolor": "0.3"})
         ax.bar_label(bars, labels=[f"{r:.0%}" for r in rates], fontsize=7)
-    ax.set_xticks(centres, list(terrains), rotation=30 if len(terrains) > 6 else 0, ha="right" if len(terrains) > 6
-                  else "center")
+    tilt = len(terrains) > 6  # long suites: slanted names do not overlap
+    ax.set_xticks(centres, list(terrains), rotation=30 if tilt else 0, ha="right" if tilt else "center")
     ax.set_ylim(0, 1.15)
     ax.set_ylabel("success rate")
     ax.legend(fontsize=8)
