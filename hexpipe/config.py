@@ -245,7 +245,8 @@ class PpoConfig(_Section):
 class EvalConfig(_Section):
     """Generalisation suite and baselines."""
 
-    terrains: tuple[str, ...] = ("single_block", "extra_blocks", "wide_block", "rough")
+    terrains: tuple[str, ...] = ("flat", "single_block", "extra_blocks", "wide_block", "rough", "low_block",
+                                 "tall_block", "steps_up", "block_near", "block_far")
     terrain_files: tuple[str, ...] = ()
     episodes: PositiveInt = 20
     seed: int = 1000

@@ -11,7 +11,7 @@ from stable_baselines3.common.vec_env import DummyVecEnv
 
 from hexpipe.config import Params, load_params
 from hexpipe.envs.hexapod import HexapodEnv
-from hexpipe.evaluation.episodes import TRACE_COLUMNS, lift_near_and_away
+from hexpipe.evaluation.episodes import TRACE_COLUMNS, lift_before_and_away
 from hexpipe.evaluation.metrics import rank_gaits
 from hexpipe.evaluation.run import GRID_SEEDS, evaluate
 from hexpipe.evaluation.video import count_frames
@@ -60,17 +60,21 @@ def test_evaluate_writes_metrics_report_recordings_and_video(blind):
     assert "single_block" in summary and "report.md" in summary
 
     metrics = json.loads((report / "metrics.json").read_text())
-    assert list(metrics) == ["single_block", "extra_blocks"]
-    for row in metrics.values():
+    terrains = {k: v for k, v in metrics.items() if isinstance(v, dict)}
+    assert list(terrains) == ["single_block", "extra_blocks"]
+    for row in terrains.values():
         assert list(row) == ["policy", "blind", "best_fixed", "open_loop"]
         for m in row.values():
             assert m["episodes"] == 2
             for key in ("success_rate", "fall_rate", "stuck_rate"):
                 assert 0.0 <= m[key] <= 1.0
+            assert m["success_ci_low"] <= m["success_rate"] <= m["success_ci_high"]
             assert m["distance_std"] >= 0 and all(isinstance(v, int | float) for v in m.values())
     fixed = metrics["single_block"]["best_fixed"]
     assert (fixed["a_mean"], fixed["b_mean"]) == pytest.approx((0.3, 0.3))  # the 1-point grid's gait, held
-    assert fixed["b_near_block"] == pytest.approx(0.3)  # a fixed gait lifts the same everywhere
+    for name in ("policy", "blind"):  # the verdict, flat numbers beside the terrains
+        assert metrics[f"verdict/{name}/terrains"] == 2
+        assert metrics[f"verdict/{name}/beats_best_fixed_everywhere"] in (0, 1)
 
     rows = pd.read_csv(report / "results.csv")
     grid_rows = len(blind.ppo.train_terrains) * GRID_SEEDS  # the 1-gait grid, on every training terrain
@@ -84,6 +88,7 @@ def test_evaluate_writes_metrics_report_recordings_and_video(blind):
     assert "ppo-blind from" in text and "hexpipe evaluate" in text and "a=0.30 b=0.30 omega=1.50pi" in text
     assert "fails on a wider block" not in text  # claims only for the terrains evaluated
     assert "crosses the block it was trained on" in text
+    assert "## Verdict" in text and "### `policy`" in text and "### `blind`" in text
     for name in ("success.png", "cpg_single_block.png", "cpg_extra_blocks.png", "grid.csv"):
         assert (report / name).stat().st_size > 0
 
@@ -153,25 +158,25 @@ def test_unknown_terrain_fails_before_any_episode(tmp_path):
     assert not (tmp_path / "eval").exists()
 
 
-def test_gait_ranking_prefers_success_then_distance_then_speed():
-    rows = pd.DataFrame([
-        {"gait": "slow", "success": True, "distance": 3.0, "time": 30.0, "termination": "goal"},
+def test_gait_ranking_breaks_ties_by_distance_up_to_the_goal_then_speed():
+    rows = pd.DataFrame([  # same success and cost of transport: the ties the ranking's last keys break
+        {"gait": "overshoot", "success": True, "distance": 3.02, "time": 20.0, "termination": "goal"},
         {"gait": "fast", "success": True, "distance": 3.004, "time": 10.0, "termination": "goal"},
         {"gait": "far", "success": False, "distance": 2.5, "time": 40.0, "termination": "time_limit"},
         {"gait": "stuck", "success": False, "distance": 0.5, "time": 6.0, "termination": "stuck"},
-    ])
-    assert rank_gaits(rows, goal_distance=3.0)["gait"].tolist() == ["fast", "slow", "far", "stuck"]
-    overshoot = pd.concat([rows, pd.DataFrame([{"gait": "overshoot", "success": True, "distance": 3.02, "time": 20.0,
-                                                  "termination": "goal"}])])
-    assert rank_gaits(overshoot, goal_distance=3.0)["gait"].tolist()[:3] == ["fast", "overshoot", "slow"]
+    ]).assign(cost_of_transport=2.0)
+    assert rank_gaits(rows, goal_distance=3.0)["gait"].tolist() == ["fast", "overshoot", "far", "stuck"]
 
 
-def test_lift_is_split_between_steps_near_blocks_and_open_ground():
-    distance = np.linspace(0.0, 3.0, 31)  # one trace row every 0.1 m
-    b = np.where((distance >= 0.5) & (distance <= 1.8), 0.45, 0.15)  # lifts from 0.5 m before to 0.5 m past
+def test_lift_is_split_between_the_last_30_cm_before_a_face_and_open_ground():
+    distance = np.arange(0.05, 3.0, 0.1)  # one trace row every 0.1 m, between the window edges
+    b = np.where((distance >= 0.45) & (distance <= 1.75), 0.45, 0.15)  # lifts from 0.55 m before to 0.45 m past
     trace = np.zeros((len(distance), len(TRACE_COLUMNS)), dtype=np.float32)
     trace[:, TRACE_COLUMNS.index("distance")], trace[:, TRACE_COLUMNS.index("b")] = distance, b
-    near, away = lift_near_and_away(trace, [(1.0, 1.3)])  # a block from 1.0 to 1.3 m: near = 0.0 .. 1.8 m
-    assert away == pytest.approx(0.15)
-    assert near == pytest.approx((5 * 0.15 + 14 * 0.45) / 19, abs=1e-6)
-    assert np.isnan(lift_near_and_away(trace, [])[0])  # no block: nothing is near one
+    before, away = lift_before_and_away(trace, [(1.0, 1.3)])  # before: 0.7 .. 1.0 m; open: past 1.8 m
+    assert before == pytest.approx(0.45) and away == pytest.approx(0.15)
+    lifts_late = trace.copy()
+    lifts_late[:, TRACE_COLUMNS.index("b")] = np.where(distance >= 0.95, 0.45, 0.15)
+    assert lift_before_and_away(lifts_late, [(1.0, 1.3)])[0] == pytest.approx((2 * 0.15 + 0.45) / 3)
+    before, away = lift_before_and_away(trace, [])  # no block: nothing before one, everything open
+    assert np.isnan(before) and away == pytest.approx(b.mean())

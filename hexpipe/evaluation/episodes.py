@@ -21,8 +21,11 @@ from hexpipe.evaluation.suite import Scenario
 
 StepHook = Callable[[HexapodEnv, float, dict[str, Any], bool], None]
 TRACE_COLUMNS = ("time", "distance", "a", "b", "omega")  # s, m, rad, rad, rad/s
-# Where the body counts as "near a block" for the lift statistics: from this far before a block's start (m; the
-# front feet reach about 0.45 m ahead of the base) until this far past its end (the rear legs are still on it).
+# The lift statistics, by the body's forward distance (m from the start). "Before the face": the last BEFORE_FACE
+# before a block's start, where an adaptive gait must be lifting (issue 10's adaptation measure). "Open ground":
+# farther than NEAR_BEFORE before any block (the front feet reach about 0.45 m ahead of the base and a policy may
+# start lifting early) and NEAR_AFTER past its end (the rear legs are still on it).
+BEFORE_FACE = 0.3
 NEAR_BEFORE, NEAR_AFTER = 1.0, 0.5
 
 
@@ -57,16 +60,18 @@ def _obstacles(env: HexapodEnv) -> list[tuple[float, float]]:
     return spans
 
 
-def lift_near_and_away(trace: np.ndarray, obstacles: list[tuple[float, float]]) -> tuple[float, float]:
-    """Mean b (rad) over the steps near a block and over the steps on open ground; NaN where there were none.
+def lift_before_and_away(trace: np.ndarray, obstacles: list[tuple[float, float]]) -> tuple[float, float]:
+    """Mean b (rad) over the steps in the BEFORE_FACE before a block and over the steps on open ground; NaN where
+    there were none (no block, or stuck before reaching the window).
 
-    An adaptive gait lifts its feet near blocks and lowers them elsewhere; a fixed gait has the same b in both.
+    An adaptive gait lifts its feet before blocks and lowers them elsewhere; a fixed gait has the same b in both.
     """
     x, b = trace[:, TRACE_COLUMNS.index("distance")], trace[:, TRACE_COLUMNS.index("b")]
-    near = np.zeros(len(x), dtype=bool)
+    before, near = np.zeros(len(x), dtype=bool), np.zeros(len(x), dtype=bool)
     for lo, hi in obstacles:
+        before |= (x >= lo - BEFORE_FACE) & (x < lo)
         near |= (x >= lo - NEAR_BEFORE) & (x <= hi + NEAR_AFTER)
-    return tuple(float(b[mask].mean()) if mask.any() else math.nan for mask in (near, ~near))
+    return tuple(float(b[mask].mean()) if mask.any() else math.nan for mask in (before, ~near))
 
 
 def _trace_row(info: dict[str, Any]) -> list[float]:
@@ -127,7 +132,7 @@ def run_episode(params: Params, job: EpisodeJob, on_step: StepHook | None = None
         env.close()
 
     cpg = np.asarray(trace, dtype=np.float32)
-    b_near, b_open = lift_near_and_away(cpg, obstacles)
+    b_before, b_open = lift_before_and_away(cpg, obstacles)
     gait = job.controller.gait
     row = {
         "terrain": job.scenario.stem, "controller": job.controller.name, "episode": job.index, "seed": job.seed,
@@ -136,7 +141,7 @@ def run_episode(params: Params, job: EpisodeJob, on_step: StepHook | None = None
         "distance": float(info["distance"]), "time": float(info["time"]), "steps": len(trace) - 1,
         **{f"{k}_mean": float(cpg[:, i].mean()) for i, k in enumerate(TRACE_COLUMNS) if i >= 2},
         **{f"{k}_max": float(cpg[:, i].max()) for i, k in enumerate(TRACE_COLUMNS) if i >= 2},
-        "b_near_block": b_near, "b_open": b_open,
+        "b_before_block": b_before, "b_open": b_open,
         "energy_j": float(info["energy"]),
         "cost_of_transport": cost_of_transport(float(info["energy"]), mass, float(info["distance"])),
         "wall_s": time.perf_counter() - start,

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -17,8 +16,17 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from hexpipe.evaluation.episodes import TRACE_COLUMNS, EpisodeResult
-from hexpipe.evaluation.metrics import Table
+from hexpipe.atomic import atomic_path, write_text
+from hexpipe.evaluation.episodes import BEFORE_FACE, NEAR_AFTER, NEAR_BEFORE, TRACE_COLUMNS, EpisodeResult
+from hexpipe.evaluation.metrics import (
+    ADAPTATION_TARGET,
+    ANYWHERE,
+    SUCCESS_MARGIN,
+    Table,
+    adaptation,
+    summary_numbers,
+    verdict,
+)
 
 # The paper's generalisation claims, by scenario: (claim, crosses?).
 PAPER_CLAIMS = {
@@ -27,6 +35,7 @@ PAPER_CLAIMS = {
     "wide_block": ("fails on a wider block", False),
 }
 CROSSES = 0.5  # a success rate at or above this counts as "crosses"
+LEARNED = ("policy", "blind")  # the controllers the verdict judges
 
 
 @dataclass
@@ -49,20 +58,12 @@ class ReportInputs:
     notes: list[str] = field(default_factory=list)
 
 
-def atomic_write(path: Path, text: str) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp")
-    tmp.write_text(text)
-    os.replace(tmp, path)
-
-
 def _save(fig, path: Path) -> None:
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
     FigureCanvasAgg(fig)
-    tmp = path.with_name(f".{path.stem}.tmp{path.suffix}")
-    fig.savefig(tmp, dpi=110)
-    os.replace(tmp, path)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=110)
 
 
 def plot_cpg(result: EpisodeResult, path: Path, initial: tuple[float, float, float], goal: float) -> None:
@@ -91,19 +92,24 @@ def plot_cpg(result: EpisodeResult, path: Path, initial: tuple[float, float, flo
 
 
 def plot_success(table: Table, terrains: Sequence[str], controllers: Sequence[str], path: Path) -> None:
-    """Grouped bars: success rate per terrain, one bar per controller."""
+    """Grouped bars: success rate per terrain, one bar per controller, with its 95% Wilson interval."""
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(max(6, 1.6 * len(terrains)), 4), layout="constrained")
+    fig = Figure(figsize=(min(12, max(6, 1.2 * len(terrains))), 4), layout="constrained")
     ax = fig.subplots()
     width = 0.8 / max(len(controllers), 1)
     centres = np.arange(len(terrains))
     for k, controller in enumerate(controllers):
-        rates = [table.get(t, {}).get(controller, {}).get("success_rate", 0.0) for t in terrains]
-        bars = ax.bar(centres + (k - (len(controllers) - 1) / 2) * width, rates, width, label=controller)
+        cells = [table.get(t, {}).get(controller, {}) for t in terrains]
+        rates = [m.get("success_rate", 0.0) for m in cells]
+        errors = [[r - m.get("success_ci_low", r) for r, m in zip(rates, cells, strict=True)],
+                  [m.get("success_ci_high", r) - r for r, m in zip(rates, cells, strict=True)]]
+        bars = ax.bar(centres + (k - (len(controllers) - 1) / 2) * width, rates, width, label=controller,
+                      yerr=errors, error_kw={"elinewidth": 0.8, "capsize": 2, "ecolor": "0.3"})
         ax.bar_label(bars, labels=[f"{r:.0%}" for r in rates], fontsize=7)
-    ax.set_xticks(centres, list(terrains))
-    ax.set_ylim(0, 1.12)
+    tilt = len(terrains) > 6  # long suites: slanted names do not overlap
+    ax.set_xticks(centres, list(terrains), rotation=30 if tilt else 0, ha="right" if tilt else "center")
+    ax.set_ylim(0, 1.15)
     ax.set_ylabel("success rate")
     ax.legend(fontsize=8)
     ax.grid(axis="y", alpha=0.3)
@@ -120,9 +126,17 @@ def _markdown_table(header: Sequence[str], rows: Sequence[Sequence[str]]) -> str
     return "\n".join(lines)
 
 
+def _spread(m: dict, key: str, prefix: str, spec: str) -> str:
+    """'mean ± std (CI low-high)', or '-' where no episode reached the goal."""
+    if key not in m:
+        return "-"
+    return (f"{m[key]:{spec}} ± {m[f'{prefix}_std']:{spec}} ({m[f'{prefix}_ci_low']:{spec}}-"
+            f"{m[f'{prefix}_ci_high']:{spec}})")
+
+
 def results_table(table: Table, terrains: Sequence[str], controllers: Sequence[str]) -> str:
-    header = ("terrain", "controller", "success", "distance (m)", "time to goal (s)", "cost of transport", "fall",
-              "stuck", "mean a / b / omega", "b open / near blocks", "episodes")
+    header = ("terrain", "controller", "success (95% CI)", "distance (m)", "time to goal (s)", "cost of transport",
+              "fall", "stuck", "mean a / b / omega", "b before face / open", "episodes")
     rows = []
     for t in terrains:
         for c in controllers:
@@ -130,12 +144,64 @@ def results_table(table: Table, terrains: Sequence[str], controllers: Sequence[s
             if m is None:
                 continue
             rows.append((
-                t, c, _fmt(m["success_rate"], ".0%"), f"{m['distance_mean']:.2f} ± {m['distance_std']:.2f}",
-                _fmt(m.get("time_to_goal_mean"), ".1f"), _fmt(m.get("cost_of_transport")), _fmt(m["fall_rate"], ".0%"),
-                _fmt(m["stuck_rate"], ".0%"), f"{m['a_mean']:.2f} / {m['b_mean']:.2f} / {m['omega_mean']:.2f}",
-                f"{_fmt(m.get('b_open'))} / {_fmt(m.get('b_near_block'))}", str(m["episodes"]),
+                t, c, f"{m['success_rate']:.0%} ({m['success_ci_low']:.0%}-{m['success_ci_high']:.0%})",
+                f"{m['distance_mean']:.2f} ± {m['distance_std']:.2f}",
+                _spread(m, "time_to_goal_mean", "time_to_goal", ".1f"),
+                _spread(m, "cost_of_transport", "cost_of_transport", ".2f"),
+                _fmt(m["fall_rate"], ".0%"), _fmt(m["stuck_rate"], ".0%"),
+                f"{m['a_mean']:.2f} / {m['b_mean']:.2f} / {m['omega_mean']:.2f}",
+                f"{_fmt(m.get('b_before_block'))} / {_fmt(m.get('b_open'))}", str(m["episodes"]),
             ))
     return _markdown_table(header, rows)
+
+
+def _mark(ok: bool) -> str:
+    return "yes" if ok else "**no**"
+
+
+def verdict_table(table: Table, terrains: Sequence[str], learned: str) -> str:
+    """Per terrain: the learned controller's and the best fixed gait's figures, and which criteria it meets."""
+    calls = verdict(table, terrains, learned)
+    if not calls:
+        return f"_`{learned}` and `best_fixed` share no terrain._"
+    rows = []
+    for v in calls:
+        ours, theirs = table[v.terrain][learned], table[v.terrain]["best_fixed"]
+        rows.append((
+            v.terrain, f"{ours['success_rate']:.0%} vs {theirs['success_rate']:.0%}: {_mark(v.success)}",
+            f"{_fmt(ours.get('time_to_goal_mean'), '.1f')} vs {_fmt(theirs.get('time_to_goal_mean'), '.1f')}: "
+            f"{_mark(v.time)}",
+            f"{_fmt(ours.get('cost_of_transport'))} vs {_fmt(theirs.get('cost_of_transport'))}: "
+            f"{_mark(v.cost_of_transport)}",
+            "**yes**" if v.beats else "no",
+        ))
+    beaten = sum(v.beats for v in calls)
+    overall = (f"**Overall: {'yes' if beaten == len(calls) else 'no'}**: `{learned}` beats the best fixed gait on "
+               f"{beaten} of {len(calls)} terrains.")
+    header = ("terrain", "success", "time to goal (s)", "cost of transport", f"`{learned}` beats it")
+    return _markdown_table(header, rows) + "\n\n" + overall
+
+
+def adaptation_text(table: Table, learned: str) -> str:
+    """Issue 10's adaptation and 'any block, anywhere' measures, with their targets."""
+    numbers = adaptation(table, learned)
+    lines = []
+    if "lift_before_face" in numbers:
+        lines.append(
+            f"- Adaptation, on single_block: mean b {numbers['b_before_face']:.2f} rad in the {BEFORE_FACE} m before "
+            f"the face, {numbers['b_open']:.2f} rad on open ground: difference {numbers['lift_before_face']:+.2f} rad "
+            f"(target >= +{ADAPTATION_TARGET:.2f}): {_mark(bool(numbers['lift_target_met']))}.")
+    else:
+        lines.append("- Adaptation: not measured (single_block not evaluated, or no episode reached the face).")
+    home = table.get("single_block", {}).get(learned)
+    moved = [t for t in ANYWHERE if f"{t}_minus_single_block" in numbers]
+    if home is not None and moved:
+        cells = ", ".join(f"{t} {table[t][learned]['success_rate']:.0%} "
+                          f"({numbers[f'{t}_minus_single_block'] * 100:+.0f} points)" for t in moved)
+        lines.append(f"- Any block, anywhere: success {cells} against {home['success_rate']:.0%} on single_block "
+                     f"(target: none more than {SUCCESS_MARGIN * 100:.0f} points below): "
+                     f"{_mark(bool(numbers['anywhere_target_met']))}.")
+    return "\n".join(lines)
 
 
 def claims_table(table: Table, terrains: Sequence[str]) -> str:
@@ -154,9 +220,25 @@ def claims_table(table: Table, terrains: Sequence[str]) -> str:
 
 
 def grid_table(grid: pd.DataFrame) -> str:
-    rows = [(r.gait, _fmt(r.success_rate, ".0%"), _fmt(r.distance_mean), _fmt(r.time_to_goal_mean, ".1f"),
-             _fmt(r.fall_rate, ".0%"), _fmt(r.stuck_rate, ".0%"), str(r.episodes)) for r in grid.itertuples()]
-    return _markdown_table(("gait", "success", "distance (m)", "time to goal (s)", "fall", "stuck", "episodes"), rows)
+    rows = [(r.gait, _fmt(r.success_rate, ".0%"), _fmt(r.cost_of_transport), _fmt(r.distance_mean),
+             _fmt(r.time_to_goal_mean, ".1f"), _fmt(r.fall_rate, ".0%"), _fmt(r.stuck_rate, ".0%"), str(r.episodes))
+            for r in grid.itertuples()]
+    header = ("gait", "success", "cost of transport", "distance (m)", "time to goal (s)", "fall", "stuck", "episodes")
+    return _markdown_table(header, rows)
+
+
+def verdict_section(table: Table, inputs: ReportInputs) -> str:
+    """How to read the verdict, then one table and the adaptation measures per learned controller."""
+    parts = [
+        f"On each terrain a learned controller beats `best_fixed` when its success rate is at most "
+        f"{SUCCESS_MARGIN * 100:.0f} points below (or above), its mean time to goal is no longer and its mean cost of "
+        "transport is lower, all three; a controller that never reaches the goal fails the last two, a baseline that "
+        "never does passes them. The calls use the point estimates: where the intervals in Results overlap, a call "
+        "may flip with other seeds.",
+    ]
+    for learned in (c for c in LEARNED if c in inputs.controllers):
+        parts += [f"### `{learned}`", verdict_table(table, inputs.terrains, learned), adaptation_text(table, learned)]
+    return "\n\n".join(parts)
 
 
 def markdown(table: Table, inputs: ReportInputs) -> str:
@@ -175,16 +257,20 @@ def markdown(table: Table, inputs: ReportInputs) -> str:
         f"Produced by:\n\n```\n{inputs.command}\n```",
         "Every controller runs the same seeded episodes on every terrain (domain randomisation off).\n\n"
         + "\n".join(f"- `{c}`: {inputs.described.get(c, '')}" for c in controllers) + f"\n\n{settings}",
-        "## Results\n\n" + results_table(table, terrains, controllers) + "\n\nCost of transport: E / (m g d) of the "
-        "episodes that reach the goal, E the mechanical work of the 18 joints (sum of |torque x velocity| over time). "
-        "b open / near blocks: the mean lift (rad) on open ground and from 1 m before a block to 0.5 m past it; an "
-        "adaptive gait lifts near blocks only.",
+        "## Results\n\n" + results_table(table, terrains, controllers) + "\n\nSuccess: the share of episodes that "
+        "reach the goal, with its 95% Wilson interval. Time to goal and cost of transport: mean ± std (95% bootstrap "
+        "interval of the mean) over the episodes that reach the goal. Cost of transport: E / (m g d), E the "
+        "mechanical work of the 18 joints (sum of |torque x velocity| over time). b before face / open: the mean lift "
+        f"(rad) while the body is in the last {BEFORE_FACE} m before a block's face, and on open ground (more than "
+        f"{NEAR_BEFORE} m before a block or {NEAR_AFTER} m past it); an adaptive gait lifts before blocks only, a "
+        "fixed gait has the same b in both.",
+        "## Verdict: does the learned policy beat the best fixed gait?\n\n" + verdict_section(table, inputs),
         "## The paper's claims and ours\n\nThe policy \"crosses\" a terrain when at least "
         f"{CROSSES:.0%} of its episodes reach the goal.\n\n" + claims_table(table, terrains),
         f"## Best fixed gait\n\n`best_fixed` = **{inputs.best_gait}** (zero action: the CPG holds it), the best of "
-        "the grid below on the training terrains (ranked by success rate, then mean distance up to the goal, then "
-        "time to goal; "
-        "seeds disjoint from the evaluation seeds).\n\n" + grid_table(inputs.grid),
+        "the grid below on the training terrains (ranked by success rate, then by the cost of transport of the "
+        "episodes that reach the goal, then mean distance up to the goal, then time to goal; seeds disjoint from the "
+        "evaluation seeds).\n\n" + grid_table(inputs.grid),
         "## Figures\n\nThe CPG plots show the policy's first episode on each terrain: a, b and omega against forward "
         "distance with the blocks (and bumpy ground) shaded (the paper, section 4.2: a grows for long strides, b "
         "rises before a block).\n\n" + "\n\n".join(figures),
@@ -200,8 +286,8 @@ def write_reports(report_dir: Path, rows: pd.DataFrame, table: Table, inputs: Re
     """Write every report file (metrics.json last, so its presence means the rest is complete)."""
     report_dir.mkdir(parents=True, exist_ok=True)
     written = []
-    atomic_write(report_dir / "results.csv", rows.to_csv(index=False))
-    atomic_write(report_dir / "grid.csv", inputs.grid.to_csv(index=False))
+    write_text(report_dir / "results.csv", rows.to_csv(index=False))
+    write_text(report_dir / "grid.csv", inputs.grid.to_csv(index=False))
     written += [report_dir / "results.csv", report_dir / "grid.csv"]
     plot_success(table, inputs.terrains, inputs.controllers, report_dir / "success.png")
     written.append(report_dir / "success.png")
@@ -212,6 +298,8 @@ def write_reports(report_dir: Path, rows: pd.DataFrame, table: Table, inputs: Re
         path = report_dir / f"cpg_{terrain}.png"
         plot_cpg(result, path, inputs.cpg_initial, inputs.goal_distance)
         written.append(path)
-    atomic_write(report_dir / "report.md", markdown(table, inputs))
-    atomic_write(report_dir / "metrics.json", json.dumps(table, indent=2) + "\n")
+    write_text(report_dir / "report.md", markdown(table, inputs))
+    learned = [c for c in LEARNED if c in inputs.controllers]
+    metrics = {**table, **summary_numbers(table, inputs.terrains, learned)}  # terrains keep the suite's order
+    write_text(report_dir / "metrics.json", json.dumps(metrics, indent=2) + "\n")
     return [*written, report_dir / "report.md", report_dir / "metrics.json"]

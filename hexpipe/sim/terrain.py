@@ -773,6 +773,13 @@ SCENARIOS: dict[str, TerrainRecipe] = {
     "stairs": TerrainRecipe(name="stairs", stairs=StairsSpec()),
     # A training distribution: blocks of every height, depth, count and position, rough and flat episodes.
     "varied": TerrainRecipe(name="varied", varied=VariedSpec()),
+    # Unseen layouts of the evaluation suite (the fixed-gait checks behind each: benchmarks/suite_check.py).
+    # The highest block the best fixed gait (a = 0.4, b = 0.5, omega = 1.5 pi) crosses every time; 0.14 m stops it.
+    "tall_block": TerrainRecipe(name="tall_block", boxes=(_block_spec(1.0, 0.3, 0.12),)),
+    "low_block": TerrainRecipe(name="low_block", boxes=(_block_spec(1.0, 0.3, 0.06),)),  # a low lift may do
+    "steps_up": TerrainRecipe(name="steps_up", stairs=StairsSpec(start=1.0, steps=2, rise=0.06, run=0.5, top=1.0)),
+    "block_near": TerrainRecipe(name="block_near", boxes=(_block_spec(0.6, 0.3, 0.1),)),  # single_block, moved
+    "block_far": TerrainRecipe(name="block_far", boxes=(_block_spec(1.6, 0.3, 0.1),)),
 }
 
 
