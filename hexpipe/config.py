@@ -350,9 +350,8 @@ def parse_override(text: str) -> tuple[str, Any]:
     return key.strip(), value
 
 
-def apply_overrides(params: Params, overrides: list[str] | tuple[str, ...], source: str = "--set") -> Params:
-    """`params` with --set style overrides applied and validated again (ConfigError naming `source` and the key)."""
-    tree = params.model_dump(mode="json")
+def _validated(tree: dict[str, Any], overrides: list[str] | tuple[str, ...], source: str) -> Params:
+    """Apply --set overrides to a raw params tree and validate it (ConfigError naming `source` and the key)."""
     for text in overrides:
         key, value = parse_override(text)
         _set_dotted(tree, key, value)
@@ -360,6 +359,11 @@ def apply_overrides(params: Params, overrides: list[str] | tuple[str, ...], sour
         return Params.model_validate(tree)
     except ValidationError as exc:
         raise ConfigError(format_validation_error(exc, Params, source)) from None
+
+
+def apply_overrides(params: Params, overrides: list[str] | tuple[str, ...], source: str = "--set") -> Params:
+    """`params` with --set style overrides applied and validated again."""
+    return _validated(params.model_dump(mode="json"), overrides, source)
 
 
 def load_params(path: str | Path = "params.yaml", overrides: list[str] | tuple[str, ...] = ()) -> Params:
@@ -373,10 +377,4 @@ def load_params(path: str | Path = "params.yaml", overrides: list[str] | tuple[s
         raise ConfigError(f"{path}: the file is empty; write the sections to change (or `{{}}` for all defaults)")
     if not isinstance(tree, dict):
         raise ConfigError(f"{path}: top level must be a mapping of sections")
-    for text in overrides:
-        key, value = parse_override(text)
-        _set_dotted(tree, key, value)
-    try:
-        return Params.model_validate(tree)
-    except ValidationError as exc:
-        raise ConfigError(format_validation_error(exc, Params, str(path))) from None
+    return _validated(tree, overrides, str(path))

@@ -5,6 +5,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from orphans import kill_and_list_survivors
 
 from hexpipe.collect import MANIFEST, collect, plan_episodes, run_episode
 from hexpipe.config import Params, load_params
@@ -70,17 +71,6 @@ def test_plan_is_deterministic_and_follows_the_mix(tmp_path):
     assert 0.55 < share < 0.95
 
 
-def _children(pid: int) -> list[int]:
-    return [int(c) for t in Path(f"/proc/{pid}/task").iterdir() for c in (t / "children").read_text().split()]
-
-
-def _running(pid: int) -> bool:
-    try:
-        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"  # not a zombie
-    except (FileNotFoundError, ProcessLookupError):
-        return False
-
-
 @pytest.mark.parametrize("signal_name", ["SIGINT", "SIGKILL"])
 def test_interrupted_collect_leaves_no_unreadable_file_and_rerun_completes(tmp_path, signal_name):
     """Ctrl-C or a kill of the whole process group mid-dataset, then a rerun.
@@ -137,11 +127,8 @@ def test_interrupted_collect_leaves_no_unreadable_file_and_rerun_completes(tmp_p
 
 def test_workers_die_with_a_killed_collect(tmp_path):
     """kill -9 of collect alone (not its group): its workers must not live on and write episodes."""
-    import os
-    import signal
     import subprocess
     import sys
-    import time
 
     out = tmp_path / "rollouts"
     proc = subprocess.Popen(
@@ -149,18 +136,7 @@ def test_workers_die_with_a_killed_collect(tmp_path):
          "--set", "collect.episodes=8", "--set", "collect.workers=2", "--set", "collect.max_seconds=3",
          "--set", f"collect.out_dir={out}", "--report", str(tmp_path / "collect.json")],
         cwd=tmp_path, start_new_session=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    deadline = time.time() + 120
-    while time.time() < deadline and len(_children(proc.pid)) < 2:
-        time.sleep(0.05)
-    workers = _children(proc.pid)
-    assert len(workers) >= 2
-    os.kill(proc.pid, signal.SIGKILL)
-    proc.wait(timeout=30)
-    deadline = time.time() + 10
-    alive = workers
-    while alive and time.time() < deadline:
-        alive = [w for w in workers if _running(w)]
-        time.sleep(0.05)
+    alive = kill_and_list_survivors(proc)
     assert not alive, f"workers {alive} outlived their collect"
 
 

@@ -17,6 +17,7 @@ import pytest
 import yaml
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
+from orphans import kill_and_list_survivors
 from pydantic import BaseModel
 from typer.testing import CliRunner
 
@@ -324,37 +325,12 @@ def test_evaluate_never_names_or_deletes_outside_its_folder(tmp_path):
 
 def test_env_workers_die_with_a_killed_train_ppo(tmp_path):
     """kill -9 of train-ppo alone: its SubprocVecEnv workers must not live on."""
-    import os
-    import signal
     import subprocess
     import sys
-    import time
-
-    def children(pid: int) -> list[int]:
-        return [int(c) for t in Path(f"/proc/{pid}/task").iterdir() for c in (t / "children").read_text().split()]
-
-    def running(pid: int) -> bool:
-        try:
-            return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
-        except (FileNotFoundError, ProcessLookupError):
-            return False
 
     proc = subprocess.Popen(
         [sys.executable, "-m", "hexpipe.cli", "train-ppo", "--set", "ppo.blind=true", "--set", "ppo.n_envs=2",
          "--set", f"ppo.out_dir={tmp_path / 'ppo'}", "--set", f"ppo.report_dir={tmp_path / 'r'}"],
         cwd=ROOT, start_new_session=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    try:
-        deadline = time.time() + 120
-        while time.time() < deadline and len(children(proc.pid)) < 2:
-            time.sleep(0.05)
-        workers = children(proc.pid)
-        assert len(workers) >= 2
-    finally:
-        os.kill(proc.pid, signal.SIGKILL)
-        proc.wait(timeout=30)
-    deadline = time.time() + 10
-    alive = workers
-    while alive and time.time() < deadline:
-        alive = [w for w in workers if running(w)]
-        time.sleep(0.05)
+    alive = kill_and_list_survivors(proc)
     assert not alive, f"env workers {alive} outlived train-ppo"
