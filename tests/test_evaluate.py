@@ -143,7 +143,7 @@ def test_policy_features_match_training_layout(seeing):
     assert policy.sensors == ("heightmap",) and policy.name == "ppo+heightmap-vae8"
     env = HexapodEnv("single_block", sim=seeing.sim, cpg=seeing.cpg, sensors=seeing.sensors, task=seeing.task)
     obs, _ = env.reset(seed=3)
-    wrapped = TerrainFeatures(DummyVecEnv([lambda: env]), policy.encoder, heightmap_shape=(32, 32))
+    wrapped = TerrainFeatures(DummyVecEnv([lambda: env]), policy.encoder, frame_shape=(32, 32))
     batch = {k: v[None] for k, v in obs.items()}
     np.testing.assert_array_equal(policy.features(obs), wrapped.features(batch))
     action = policy.predict(obs)

@@ -93,9 +93,8 @@ def run_episode(params: Params, job: EpisodeJob, on_step: StepHook | None = None
         torch.set_num_threads(1)  # one core per worker
     start = time.perf_counter()
     controller = build(job.controller, params)
-    env = HexapodEnv(
-        job.scenario.recipe, sim=params.sim, cpg=params.cpg, sensors=params.sensors,
-        task=params.task.model_copy(update={"sensors": controller.sensors}), initial_cpg=controller.initial_cpg,
+    env = HexapodEnv.from_params(
+        params, job.scenario.recipe, obs_sensors=controller.sensors, initial_cpg=controller.initial_cpg,
         render_mode="rgb_array" if job.video else None,
     )
     try:
@@ -107,7 +106,7 @@ def run_episode(params: Params, job: EpisodeJob, on_step: StepHook | None = None
                 meta = episode_metadata(env, job.seed, params.model_dump_json(), index=job.index,
                                         controller=job.controller.name, policy_dir=job.controller.policy_dir or "")
                 log = stack.enter_context(EpisodeLog(env, job.mcap, meta, log_every=params.collect.log_every))
-                log.step(0.0, info, force=True)
+                log.step(0.0, force=True)
             if job.video is not None:
                 video = stack.enter_context(Mp4Writer(job.video, fps=params.sim.control_hz))
                 video.add(env.render(), caption(env.terrain.name, info["time"], info["cpg"]))
@@ -119,7 +118,7 @@ def run_episode(params: Params, job: EpisodeJob, on_step: StepHook | None = None
                 ended = terminated or truncated
                 trace.append(_trace_row(info))
                 if log is not None:
-                    log.step(reward, info, force=ended)
+                    log.step(reward, force=ended)
                 if video is not None:
                     video.add(env.render(), caption(env.terrain.name, info["time"], info["cpg"]))
                 if on_step is not None:
