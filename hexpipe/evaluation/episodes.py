@@ -45,6 +45,7 @@ class EpisodeResult:
     row: dict[str, Any]  # one line of results.csv
     trace: np.ndarray  # (steps + 1, len(TRACE_COLUMNS)) float32: the CPG parameters against time and distance
     obstacles: list[tuple[float, float]] = field(default_factory=list)  # x-extents of blocks/bumps (m from start)
+    feet: np.ndarray | None = None  # (steps + 1, legs) bool foot contact (episode 0 only): the gait diagram's data
 
 
 def _obstacles(env: HexapodEnv) -> list[tuple[float, float]]:
@@ -72,6 +73,11 @@ def lift_before_and_away(trace: np.ndarray, obstacles: list[tuple[float, float]]
         before |= (x >= lo - BEFORE_FACE) & (x < lo)
         near |= (x >= lo - NEAR_BEFORE) & (x <= hi + NEAR_AFTER)
     return tuple(float(b[mask].mean()) if mask.any() else math.nan for mask in (before, ~near))
+
+
+def _feet(env: HexapodEnv) -> np.ndarray:
+    """Which feet touch the ground now (the contacts sensor's first row), legs in the robot's order."""
+    return env.sense(("contacts",))["contacts"][0] > 0
 
 
 def _trace_row(info: dict[str, Any]) -> list[float]:
@@ -113,10 +119,13 @@ def run_episode(params: Params, job: EpisodeJob, on_step: StepHook | None = None
             if on_step is not None:
                 on_step(env, 0.0, info, False)
             trace = [_trace_row(info)]
+            feet = [_feet(env)] if job.index == 0 else None
             while True:
                 obs, reward, terminated, truncated, info = env.step(controller.act(obs))
                 ended = terminated or truncated
                 trace.append(_trace_row(info))
+                if feet is not None:
+                    feet.append(_feet(env))
                 if log is not None:
                     log.step(reward, force=ended)
                 if video is not None:
@@ -145,4 +154,4 @@ def run_episode(params: Params, job: EpisodeJob, on_step: StepHook | None = None
         "cost_of_transport": cost_of_transport(float(info["energy"]), mass, float(info["distance"])),
         "wall_s": time.perf_counter() - start,
     }
-    return EpisodeResult(job, row, cpg, obstacles)
+    return EpisodeResult(job, row, cpg, obstacles, None if feet is None else np.array(feet))

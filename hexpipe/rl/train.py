@@ -295,6 +295,12 @@ def training_curve(episodes: list[dict[str, Any]], path: Path, window: int = 20)
         rate = np.convolve(success, np.ones(k) / k, mode="valid")
         ax_r.scatter(t, reward, s=4, alpha=0.3, label="episode")
         ax_r.plot(t[k - 1:], smooth, color="C1", label=f"mean of {k}")
+        terms = dict.fromkeys(name for e in episodes for name in e.get("reward_terms", {}))
+        for j, name in enumerate(terms):  # each term's share of the sum (forward, minus the power cost)
+            term = np.array([e.get("reward_terms", {}).get(name, 0.0) for e in episodes])
+            if np.any(term):
+                ax_r.plot(t[k - 1:], np.convolve(term, np.ones(k) / k, mode="valid"), color=f"C{3 + j}",
+                          linestyle="--", label=f"{name} term, mean of {k}")
         ax_s.plot(t[k - 1:], rate, color="C2")
         ax_r.legend(loc="lower right")
     ax_r.set(xlabel="timesteps", ylabel="episode reward (sum of the terms)", title="Episode reward")
