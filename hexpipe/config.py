@@ -131,8 +131,8 @@ def _image_sensor(name: str) -> str:
     return name
 
 
-Sensor = Annotated[str, AfterValidator(_known_sensor)]  # a registered sensor: rgb, heightmap, contacts
-ImageSensor = Annotated[str, AfterValidator(_image_sensor)]  # one the VAE encodes: rgb, heightmap
+Sensor = Annotated[str, AfterValidator(_known_sensor)]  # a name in the sensor registry (hexpipe/sensors/)
+ImageSensor = Annotated[str, AfterValidator(_image_sensor)]  # a registered sensor the VAE can encode
 
 
 class SensorConfig(_Section):
