@@ -16,8 +16,9 @@ from contextlib import contextmanager
 
 import numpy as np
 
+from hexpipe import sensors as registry
 from hexpipe.config import Params, SimConfig
-from hexpipe.envs.hexapod import HexapodEnv, quat_to_yaw
+from hexpipe.envs.hexapod import HexapodEnv
 
 SENSOR_SETS = {"physics": (), "heightmap": ("heightmap",), "camera": ("rgb",)}
 # The physics before issue 12: 240 Hz, PyBullet's default solver (50 iterations), the same servo bandwidth
@@ -70,10 +71,7 @@ def _bench_env(params: Params, terrains: tuple[str, ...], windows: int, steps: i
         sims = dict.fromkeys(SENSOR_SETS, params.sim) | {"default": params.sim, "baseline": baseline_sim(params.sim)}
         sensor_sets = SENSOR_SETS | {"default": params.task.sensors, "baseline": params.task.sensors}
         envs = {
-            name: HexapodEnv(
-                terrain, sim=sims[name], cpg=params.cpg, sensors=params.sensors,
-                task=params.task.model_copy(update={"sensors": sensors}),
-            )
+            name: HexapodEnv.from_params(params.model_copy(update={"sim": sims[name]}), terrain, obs_sensors=sensors)
             for name, sensors in sensor_sets.items()
         }
         for env in envs.values():
@@ -101,10 +99,10 @@ def _bench_env(params: Params, terrains: tuple[str, ...], windows: int, steps: i
 def _sensor_read_ms(envs: dict[str, HexapodEnv]) -> tuple[float, float]:
     """Median cost (ms) of one height-map read and one camera frame at the robot's current pose."""
     hm_env, cam_env = envs["heightmap"], envs["camera"]
-    pos, quat, _, _ = hm_env.robot.base_state()
-    yaw = quat_to_yaw(quat)
-    heightmap = _median_call(lambda: hm_env.heightmap.read(hm_env.terrain, pos[:2], yaw, 0.0))
-    camera = _median_call(lambda: cam_env.camera.read(pos, quat), repeats=50)
+    hm_view, cam_view = hm_env.view(), cam_env.view()
+    hm_read, cam_read = hm_env.reader("heightmap"), cam_env.reader("rgb")
+    heightmap = _median_call(lambda: hm_read(hm_view))
+    camera = _median_call(lambda: cam_read(cam_view), repeats=50)
     return 1e3 * heightmap, 1e3 * camera
 
 
@@ -129,16 +127,15 @@ def bench_training(params: Params, steps: int = 3072, terrain: str | None = None
     from stable_baselines3 import PPO
     from stable_baselines3.common.vec_env import VecNormalize
 
-    from hexpipe.models.vae import ConvVAE, FrozenEncoder, encoder_config
+    from hexpipe.models.vae import ConvVAE, FrozenEncoder, channels_for, encoder_config
     from hexpipe.rl.train import EnvClock, make_vec_env, wrap_features
 
     cfg, vae = params.ppo, params.vae
     torch.set_num_threads(1)
     encoder = None
     if not cfg.blind:
-        shape = ((params.sensors.heightmap_rows, params.sensors.heightmap_cols) if vae.modality == "heightmap"
-                 else (params.sensors.camera_height, params.sensors.camera_width, 3))
-        model = ConvVAE(1 if vae.modality == "heightmap" else 3, vae.image_size, vae.latent_dim)
+        shape = registry.get(vae.modality).frame_shape(params.sensors)
+        model = ConvVAE(channels_for(vae.modality), vae.image_size, vae.latent_dim)
         encoder = FrozenEncoder(model.encoder, encoder_config(model, vae.modality, shape))
     sensors = () if encoder is None else (encoder.modality,)
     terrains = (terrain,) if terrain else cfg.train_terrains

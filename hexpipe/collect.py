@@ -56,8 +56,7 @@ def dataset_signature(params: Params) -> str:
 
 def make_env(params: Params, terrain: str) -> HexapodEnv:
     """A bare env (no observation sensors): the logger reads the sensors on the steps it keeps only."""
-    task = params.task.model_copy(update={"sensors": ()})
-    return HexapodEnv(terrain, sim=params.sim, cpg=params.cpg, sensors=params.sensors, task=task)
+    return HexapodEnv.from_params(params, terrain, obs_sensors=())
 
 
 def _rollout(params: Params, plan: EpisodePlan, env: HexapodEnv, log: Any) -> tuple[dict[str, Any], float]:
@@ -67,14 +66,14 @@ def _rollout(params: Params, plan: EpisodePlan, env: HexapodEnv, log: Any) -> tu
     max_steps = round(cfg.max_seconds * params.sim.control_hz)
     info = env.last_info
     env_seconds = 0.0
-    log.step(0.0, info, force=True)
+    log.step(0.0, force=True)
     for _ in range(max_steps):
         action = rng.uniform(-cfg.action_scale, cfg.action_scale, size=3)
         tick = time.perf_counter()
         _, reward, terminated, truncated, info = env.step(action)
         env_seconds += time.perf_counter() - tick
         ended = terminated or truncated or env.steps >= max_steps
-        log.step(reward, info, force=ended)
+        log.step(reward, force=ended)
         if ended:
             break
     return info, env_seconds

@@ -10,9 +10,9 @@ import hashlib
 import json
 import math
 from pathlib import Path
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from hexpipe.validation import bool_misused, format_validation_error, parse_yaml, read_yaml, show
 
@@ -115,7 +115,24 @@ class CpgConfig(_Section):
         return self
 
 
-Sensor = Literal["rgb", "heightmap"]
+def _known_sensor(name: str) -> str:
+    """A name from the sensor registry (hexpipe/sensors/; imported here lazily: it imports this module)."""
+    from hexpipe.sensors import get
+
+    get(name)
+    return name
+
+
+def _image_sensor(name: str) -> str:
+    from hexpipe.sensors import image_sensors
+
+    if name not in image_sensors():
+        raise ValueError(f"{name!r} is not an image sensor the VAE can encode; use one of {', '.join(image_sensors())}")
+    return name
+
+
+Sensor = Annotated[str, AfterValidator(_known_sensor)]  # a name in the sensor registry (hexpipe/sensors/)
+ImageSensor = Annotated[str, AfterValidator(_image_sensor)]  # a registered sensor the VAE can encode
 
 
 class SensorConfig(_Section):
@@ -180,7 +197,7 @@ class CollectConfig(_Section):
 class VaeConfig(_Section):
     """Convolutional VAE over the terrain sensor."""
 
-    modality: Sensor = "heightmap"
+    modality: ImageSensor = "heightmap"
     latent_dim: PositiveInt = 8
     beta: Annotated[float, Field(ge=0)] = 0.25  # 1.0 gave a linear probe of 0.87; 0.25 gives 0.94 (reports/vae)
     image_size: PositiveInt = 64  # inputs are resized to image_size x image_size

@@ -179,7 +179,7 @@ class LiveStream:
             elif self.viewers.resend_static.is_set():
                 self.viewers.resend_static.clear()
                 log.log_static(log.now_ns())
-            log.step(reward, info, force=True)  # the session's first call creates the JSON channels
+            log.step(reward, force=True)  # the session's first call creates the JSON channels
             if first_call:
                 if not self._announced:
                     self._announced = True

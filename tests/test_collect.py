@@ -39,7 +39,7 @@ def test_collect_writes_episodes_matching_the_manifest(tmp_path):
         assert counts["/terrain"] == counts["/robot"] == 1
         frames = list(iter_frames(path))
         assert len(frames) == row["frames"]
-        assert frames[0].rgb.shape == (64, 64, 3) and frames[0].heightmap.shape == (32, 32)
+        assert frames[0].sensors["rgb"].shape == (64, 64, 3) and frames[0].sensors["heightmap"].shape == (32, 32)
         meta = read_metadata(path)
         assert meta["episode"]["terrain"] == row["terrain"] and meta["episode"]["seed"] == str(row["seed"])
         assert json.loads(meta["params"]["json"])["collect"]["episodes"] == 3
@@ -58,8 +58,8 @@ def test_logged_sensors_equal_what_the_env_sensed(tmp_path):
     for _ in range(row["steps"]):
         env.step(rng.uniform(-params.collect.action_scale, params.collect.action_scale, size=3))
     sensed = env.sense(("rgb", "heightmap"))
-    assert np.array_equal(frames[-1].rgb, sensed["rgb"])
-    assert np.array_equal(frames[-1].heightmap, sensed["heightmap"])
+    assert np.array_equal(frames[-1].sensors["rgb"], sensed["rgb"])
+    assert np.array_equal(frames[-1].sensors["heightmap"], sensed["heightmap"])
     env.close()
 
 

@@ -10,6 +10,7 @@ import pytest
 import hexpipe
 from hexpipe.config import SensorConfig, TaskConfig
 from hexpipe.envs.hexapod import HexapodEnv
+from hexpipe.sensors import SENSORS
 
 LOW_GAIT = (0.25, 0.15, 1.5 * math.pi)  # the default: fast, low steps
 HIGH_GAIT = (0.25, 0.40, 1.5 * math.pi)  # b = 0.40 rad lifts the feet ~0.15 m, over the 0.10 m block
@@ -77,7 +78,7 @@ def test_actions_steer_cpg_parameters_within_bounds():
 def test_heightmap_sees_the_block_and_camera_renders_it():
     env = HexapodEnv("single_block", task=TaskConfig(sensors=("rgb", "heightmap")))
     obs, _ = env.reset(seed=0)
-    hm = obs["heightmap"].reshape(env.heightmap.shape)
+    hm = obs["heightmap"].reshape(SENSORS["heightmap"].frame_shape(env.sensor_cfg))
     near, far = env.sensor_cfg.heightmap_ahead
     row_x = near + (np.arange(hm.shape[0]) + 0.5) * (far - near) / hm.shape[0]
     on_block = (row_x > 1.03) & (row_x < 1.27)

@@ -89,14 +89,17 @@ def test_evaluate_writes_metrics_report_recordings_and_video(blind):
     assert "fails on a wider block" not in text  # claims only for the terrains evaluated
     assert "crosses the block it was trained on" in text
     assert "## Verdict" in text and "### `policy`" in text and "### `blind`" in text
-    for name in ("success.png", "cpg_single_block.png", "cpg_extra_blocks.png", "grid.csv"):
+    for name in ("success.png", "cpg_single_block.png", "cpg_extra_blocks.png", "grid.csv", "gait_single_block.png",
+                 "gait_extra_blocks.png"):
         assert (report / name).stat().st_size > 0
+    assert "![gait diagram on single_block](gait_single_block.png)" in text
 
     for terrain in ("single_block", "extra_blocks"):
         files = sorted((out / terrain).glob("*.mcap"))
         assert [f.name for f in files] == ["ep_0.mcap", "ep_1.mcap"]
         counts = count_messages(files[0])
         assert counts["/step"] >= 2 and counts["/terrain"] == 1
+        assert counts["/contacts"] == counts["/step"]  # always logged, whatever the policy observes
         meta = read_metadata(files[1])["episode"]
         assert (meta["seed"], meta["controller"], meta["terrain"]) == ("1001", "policy", terrain)
         first = rows[(rows["terrain"] == terrain) & (rows["controller"] == "policy") & (rows["episode"] == 0)]
@@ -143,7 +146,7 @@ def test_policy_features_match_training_layout(seeing):
     assert policy.sensors == ("heightmap",) and policy.name == "ppo+heightmap-vae8"
     env = HexapodEnv("single_block", sim=seeing.sim, cpg=seeing.cpg, sensors=seeing.sensors, task=seeing.task)
     obs, _ = env.reset(seed=3)
-    wrapped = TerrainFeatures(DummyVecEnv([lambda: env]), policy.encoder, heightmap_shape=(32, 32))
+    wrapped = TerrainFeatures(DummyVecEnv([lambda: env]), policy.encoder, frame_shape=(32, 32))
     batch = {k: v[None] for k, v in obs.items()}
     np.testing.assert_array_equal(policy.features(obs), wrapped.features(batch))
     action = policy.predict(obs)

@@ -30,7 +30,7 @@ class CountingEncoder:
 def test_features_encode_once_per_step_batched_and_handle_terminal_observations():
     fns = [lambda: HexapodEnv("single_block", task=Params().task.model_copy(update={"time_limit": 0.2}))] * 2
     encoder = CountingEncoder()
-    venv = TerrainFeatures(DummyVecEnv(fns), encoder, heightmap_shape=(32, 32))
+    venv = TerrainFeatures(DummyVecEnv(fns), encoder, frame_shape=(32, 32))
     obs = venv.reset()
     assert obs.shape == (2, 13 + 6 + 8) and venv.observation_space.shape == (27,)
     for _ in range(4):  # 0.2 s = 4 steps: every env truncates on the 4th

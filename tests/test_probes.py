@@ -84,8 +84,7 @@ def frames(modality: str, episodes: int = 10, steps: int = 24, seed: int = 0) ->
                 hm[row:] += height
                 img[: int((1.6 - d) / 1.8 * 48), :] = (int(1000 * height) + 30, 90, 40)
             yield Frame(
-                episode=f"ep{e:02d}", step=t, rgb=img if modality == "rgb" else None,
-                heightmap=hm if modality == "heightmap" else None,
+                episode=f"ep{e:02d}", step=t, sensors={modality: img if modality == "rgb" else hm},
                 meta={"obstacle_distance": d, "rise_distance": d if seen else None,
                       "rise_height": height if seen else None},
             )
@@ -119,10 +118,10 @@ def test_logged_steps_carry_the_rise_labels(tmp_path: Path) -> None:
     env = HexapodEnv("single_block", task=TaskConfig(sensors=()))  # block face at 1.0 m, 0.10 m high
     env.reset(seed=0)
     with EpisodeLog(env, tmp_path / "ep.mcap", {}, sensors=("heightmap",)) as log:
-        log.step(0.0, env.last_info, force=True)
+        log.step(0.0, force=True)
         for _ in range(3):
-            _, reward, *_, info = env.step(np.zeros(3))
-            log.step(reward, info)
+            _, reward, *_ = env.step(np.zeros(3))
+            log.step(reward)
     x = float(env.robot.base_state()[0][0])
     far = HexapodEnv("single_block", task=TaskConfig(sensors=()))
     far.reset(seed=0)

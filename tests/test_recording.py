@@ -27,14 +27,14 @@ from hexpipe.recording.reader import _fields  # protobuf field splitter, to look
 from hexpipe.recording.writer import (
     HEIGHT_FIELD,
     TOPIC_CPG,
-    TOPIC_HEIGHTMAP,
-    TOPIC_IMAGE,
     TOPIC_ROBOT,
     TOPIC_STEP,
     TOPIC_TERRAIN,
     TOPIC_TF,
 )
+from hexpipe.sensors import SENSORS, Message
 
+TOPIC_IMAGE, TOPIC_HEIGHTMAP = SENSORS["rgb"].topic, SENSORS["heightmap"].topic
 MCAP_CHECK = Path(__file__).resolve().parents[1] / "tools" / "mcap-check"
 STEPS = 12
 DT_NS = 50_000_000  # 20 Hz control
@@ -109,9 +109,10 @@ def write_episode(path: Path, seed: int = 0, steps: int = STEPS) -> Episode:
             writer.log_step(
                 (k + 1) * DT_NS,
                 transforms=transforms,
-                rgb=rgb,
-                heightmap=heightmap,
-                heightmap_pose=(np.array([-0.2, -0.8, 0.0]), np.array([0.0, 0.0, 0.0, 1.0]), CELL),
+                sensors=[Message(TOPIC_IMAGE, "image", rgb, "camera"), Message(
+                    TOPIC_HEIGHTMAP, "grid",
+                    (heightmap, (np.array([-0.2, -0.8, 0.0]), np.array([0.0, 0.0, 0.0, 1.0]), CELL)), "heading",
+                )],
                 joints={
                     "name": JOINT_NAMES,
                     "position": rng.normal(size=18),
@@ -143,11 +144,12 @@ def test_round_trip_frames_are_exact(episode: Episode) -> None:
     assert [f.step for f in frames] == list(range(STEPS))
     for frame, rgb, heightmap, step in zip(frames, episode.rgb, episode.heightmap, episode.step, strict=True):
         assert frame.episode == "ep_0000"
-        assert frame.rgb is not None and frame.rgb.dtype == np.uint8 and np.array_equal(frame.rgb, rgb)
-        assert frame.heightmap is not None and frame.heightmap.dtype == np.float32
-        assert np.array_equal(frame.heightmap, heightmap)
+        frame_rgb, frame_heightmap = frame.sensors.get("rgb"), frame.sensors.get("heightmap")
+        assert frame_rgb is not None and frame_rgb.dtype == np.uint8 and np.array_equal(frame_rgb, rgb)
+        assert frame_heightmap is not None and frame_heightmap.dtype == np.float32
+        assert np.array_equal(frame_heightmap, heightmap)
         assert frame.meta == step
-    assert frames[0].rgb is not None and frames[0].rgb.flags.writeable  # safe for torch.from_numpy
+    assert frames[0].sensors["rgb"].flags.writeable  # safe for torch.from_numpy
 
 
 def test_metadata_and_counts(episode: Episode) -> None:
@@ -280,7 +282,7 @@ def test_folder_order_modalities_and_nonfinite(tmp_path: Path) -> None:
         ("ep_0002", 0),
         ("ep_0002", 1),
     ]
-    assert all(f.rgb is None and f.heightmap is not None for f in frames)
+    assert all(set(f.sensors) == {"heightmap"} for f in frames)
     path = tmp_path / "nan" / "ep.mcap"
     with EpisodeWriter(path, {"episode": {"terrain": "flat"}}) as writer:
         writer.log_step(
@@ -318,11 +320,11 @@ def test_foxglove_layout_shows_every_scene_topic_the_recorder_writes(tmp_path: P
 
     env = HexapodEnv("single_block")
     try:
-        _, info = env.reset(seed=0)
+        env.reset(seed=0)
         with EpisodeLog(env, tmp_path / "ep.mcap", {}) as log:
-            log.step(0.0, info, force=True)
-            _, reward, _, _, info = env.step(np.zeros(3, dtype=np.float32))
-            log.step(reward, info, force=True)
+            log.step(0.0, force=True)
+            _, reward, *_ = env.step(np.zeros(3, dtype=np.float32))
+            log.step(reward, force=True)
     finally:
         env.close()
     with (tmp_path / "ep.mcap").open("rb") as f:
@@ -391,9 +393,8 @@ def test_log_step_cost(tmp_path: Path) -> None:
             writer.log_step(
                 (k + 1) * DT_NS,
                 transforms=transforms,
-                rgb=rgb,
-                heightmap=heightmap,
-                heightmap_pose=pose,
+                sensors=[Message(TOPIC_IMAGE, "image", rgb, "camera"),
+                         Message(TOPIC_HEIGHTMAP, "grid", (heightmap, pose), "heading")],
                 joints=joints,
                 cpg=cpg,
                 step=step,

@@ -37,6 +37,7 @@ from hexpipe.models.vae import (
     vae_loss,
 )
 from hexpipe.recording import EpisodeWriter, Frame
+from hexpipe.sensors import Message
 
 HM_NEAR, HM_FAR, HM_CELLS = -0.2, 1.4, 32  # synthetic height map: 32x32 cells covering -0.2..1.4 m ahead
 SENSE_RANGE_M = 3.0  # obstacle_distance is inf beyond this, as in the env
@@ -77,8 +78,8 @@ def synthetic_frames(
             yield Frame(
                 episode=f"ep{e:02d}",
                 step=t,
-                rgb=_rgb(d, rng) if "rgb" in modalities else None,
-                heightmap=_heightmap(d, rng) if "heightmap" in modalities else None,
+                sensors={name: make(d, rng) for name, make in (("rgb", _rgb), ("heightmap", _heightmap))
+                         if name in modalities},
                 meta={"terrain": "flat" if flat else "single_block", "obstacle_distance": d},
             )
 
@@ -214,8 +215,7 @@ def _write_rollouts(folder: Path, frames: Iterator[Frame]) -> None:
                 writer.log_step(
                     (k + 1) * 50_000_000,
                     transforms=[],
-                    heightmap=frame.heightmap,
-                    heightmap_pose=pose,
+                    sensors=[Message("/heightmap", "grid", (frame.sensors["heightmap"], pose), "heading")],
                     joints={},
                     cpg={},
                     step=frame.meta,
@@ -269,7 +269,7 @@ def test_active_dims_counts_varying_latents() -> None:
 def test_export_roundtrip_matches_model_mu(tmp_path: Path) -> None:
     torch.manual_seed(0)
     model = ConvVAE(3, 32).eval()
-    raw = np.stack([f.rgb for f in synthetic_frames(episodes=1, steps=6, modalities=("rgb",))])
+    raw = np.stack([f.sensors["rgb"] for f in synthetic_frames(episodes=1, steps=6, modalities=("rgb",))])
     export_encoder(model, tmp_path, encoder_config(model, "rgb", raw.shape[1:]))
     encoder = load_encoder(tmp_path)
     assert (encoder.modality, encoder.latent_dim) == ("rgb", 8)
@@ -323,7 +323,7 @@ def test_exported_files_load_with_weights_only(trained: tuple[VaeConfig, dict[st
     assert config["input_shape"] == [32, 32]
     assert config["normalisation"] == {"low": -0.15, "high": 0.25, "units": "m"}
     frames = list(synthetic_frames(episodes=1, steps=4, seed=7))
-    latents = load_encoder(out).encode(np.stack([f.heightmap for f in frames]))
+    latents = load_encoder(out).encode(np.stack([f.sensors["heightmap"] for f in frames]))
     assert latents.shape == (4, cfg.latent_dim) and np.isfinite(latents).all()
 
 

@@ -6,8 +6,9 @@ Observation (Dict):
   `TaskConfig.observe_position` is false (the same course shifted along x then looks the same at the same
   distance from its block);
 - `cpg` (6): a, b, omega and their rates;
-- `heightmap` (rows * cols,) float32 m, row-major (reshape with `env.heightmap.shape`; flat because SB3 expects
-  1-D vectors or images), and/or `rgb` (H, W, 3) uint8, as selected by `TaskConfig.sensors`.
+- one entry per sensor named in `TaskConfig.sensors`, as the sensor registry (`hexpipe.sensors`) declares it:
+  `heightmap` (rows * cols,) float32 m, row-major; `rgb` (H, W, 3) uint8; `contacts` (12,) per-leg contact
+  flags then normal forces (N).
 Action: Box [-1, 1]^3, scaled by `CpgConfig.accel_limit` to d^2/dt^2 (a, b, omega).
 Reward: `reward_scale` * forward velocity (m/s, displacement over the control step), as in the paper, minus
 `power_cost` * mean mechanical joint power (W) when that is set (0 is the paper's reward).
@@ -20,6 +21,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
+from collections.abc import Callable, Iterable
 from contextlib import suppress
 from typing import Any, ClassVar
 
@@ -27,12 +29,14 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from hexpipe.config import CpgConfig, SensorConfig, SimConfig, TaskConfig
+from hexpipe import sensors as registry
+from hexpipe.config import CpgConfig, Params, SensorConfig, SimConfig, TaskConfig
 from hexpipe.envs.rewards import forward_velocity_reward, power_penalty
+from hexpipe.envs.state import WORLD_FRAME, EnvScene, EnvState
+from hexpipe.sensors.heightmap import HEADING_FRAME, quat_to_yaw
 from hexpipe.sim.cpg import CPG
 from hexpipe.sim.gait import GaitMap, slew_path
-from hexpipe.sim.robot import Robot, RobotSpec
-from hexpipe.sim.sensors import Camera, HeightMapSensor
+from hexpipe.sim.robot import Robot, RobotSpec, robot_shapes
 from hexpipe.sim.terrain import Terrain, TerrainRecipe, load_terrain, realize
 
 TERMINATIONS = ("goal", "stuck", "fall", "nonfinite")
@@ -45,9 +49,23 @@ def quat_to_roll_pitch(q: np.ndarray) -> tuple[float, float]:
     return roll, pitch
 
 
-def quat_to_yaw(q: np.ndarray) -> float:
-    x, y, z, w = q
-    return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+def observation_space(cpg: CpgConfig, sensors: SensorConfig, task: TaskConfig) -> spaces.Dict:
+    """The observation Dict an env with these settings produces; needs no simulator."""
+    lo, hi = np.asarray(cpg.lower), np.asarray(cpg.upper)
+    rate = np.asarray(cpg.rate_limit)
+    obs: dict[str, spaces.Space] = {
+        "body": spaces.Box(-100.0, 100.0, shape=(13 if task.observe_position else 11,), dtype=np.float32),
+        "cpg": spaces.Box(
+            np.concatenate([lo, -rate]).astype(np.float32), np.concatenate([hi, rate]).astype(np.float32)
+        ),
+    }
+    for name in task.sensors:
+        obs[name] = registry.get(name).space(sensors)
+    return spaces.Dict(obs)
+
+
+def _yaw_quaternion(yaw: float) -> np.ndarray:
+    return np.array([0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2)])
 
 
 class HexapodEnv(gym.Env):
@@ -93,31 +111,30 @@ class HexapodEnv(gym.Env):
             self.robot_spec, self.sim_cfg.body_height, self.sim_cfg.stance_reach, self.sim_cfg.lift_gain
         )
         self.cpg = CPG(self.cpg_cfg, np.array([leg.tripod for leg in self.robot_spec.legs]))
-        self.heightmap = HeightMapSensor(self.sensor_cfg)
-        self.camera: Camera | None = None  # made on first use: only rgb observations or loggers need it
+        self._readers: dict[str, Callable[[registry.SimView], np.ndarray]] = {}  # made on first use
 
         self.action_space = spaces.Box(-1.0, 1.0, shape=(3,), dtype=np.float32)
-        self.observation_space = spaces.Dict(self._observation_spaces())
+        self.observation_space = observation_space(self.cpg_cfg, self.sensor_cfg, self.task)
+        self._observed = [k for k in self.observation_space.spaces if k not in ("body", "cpg")]
         self._accel_limit = np.asarray(self.cpg_cfg.accel_limit)
         self._max_joint_step = self.robot_spec.speeds * self.physics_dt
         self.terrain: Terrain | None = None
         self.robot: Robot | None = None
 
-    def _observation_spaces(self) -> dict[str, spaces.Space]:
-        lo, hi = np.asarray(self.cpg_cfg.lower), np.asarray(self.cpg_cfg.upper)
-        rate = np.asarray(self.cpg_cfg.rate_limit)
-        obs: dict[str, spaces.Space] = {
-            "body": spaces.Box(-100.0, 100.0, shape=(13 if self.task.observe_position else 11,), dtype=np.float32),
-            "cpg": spaces.Box(
-                np.concatenate([lo, -rate]).astype(np.float32), np.concatenate([hi, rate]).astype(np.float32)
-            ),
-        }
-        if "heightmap" in self.task.sensors:
-            obs["heightmap"] = spaces.Box(-5.0, 5.0, shape=(self.heightmap.size,), dtype=np.float32)
-        if "rgb" in self.task.sensors:
-            shape = (self.sensor_cfg.camera_height, self.sensor_cfg.camera_width, 3)
-            obs["rgb"] = spaces.Box(0, 255, shape=shape, dtype=np.uint8)
-        return obs
+    @classmethod
+    def from_params(
+        cls, params: Params, terrain: str | TerrainRecipe = "single_block", *,
+        obs_sensors: Iterable[str] | None = None, **overrides: Any,
+    ) -> HexapodEnv:
+        """The env the params describe (sim, cpg, sensors, task). obs_sensors replaces `task.sensors` (the
+        observed sensors; () for a bare env); overrides go to the constructor (initial_cpg, randomize, ...)."""
+        return cls(terrain, sim=params.sim, cpg=params.cpg, sensors=params.sensors,
+                   task=_observing(params.task, obs_sensors), **overrides)
+
+    @staticmethod
+    def observation_spec(params: Params, obs_sensors: Iterable[str] | None = None) -> spaces.Dict:
+        """The observation space of `from_params(params, obs_sensors=...)`, without starting PyBullet."""
+        return observation_space(params.cpg, params.sensors, _observing(params.task, obs_sensors))
 
     # -- episode -----------------------------------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
@@ -194,15 +211,19 @@ class HexapodEnv(gym.Env):
         if not math.isfinite(power):
             power = 0.0
         self.energy += power * self.control_dt
-        terms = {
-            "forward": forward_velocity_reward(dx, self.control_dt, self.task.reward_scale),
-            "power": power_penalty(power, self.task.power_cost),
-        }
+        terms = self._reward_terms(dx, power)
         reward = sum(terms.values())
         truncated = termination is None and self.steps >= self.max_steps
         obs = self._observation() if termination != "nonfinite" else self._zero_observation()
         self.last_info = self._info(pos, terms, termination, power)
         return obs, reward, termination is not None, truncated, self.last_info
+
+    def _reward_terms(self, dx: float, power: float) -> dict[str, float]:
+        """The named reward terms of one control step: dx (m forward), power (W, mean mechanical joint power)."""
+        return {
+            "forward": forward_velocity_reward(dx, self.control_dt, self.task.reward_scale),
+            "power": power_penalty(power, self.task.power_cost),
+        }
 
     def _termination(self, pos: np.ndarray, quat: np.ndarray) -> str | None:
         distance = float(pos[0] - self.start_xy[0])
@@ -229,29 +250,31 @@ class HexapodEnv(gym.Env):
             "body": np.clip(body, -100, 100).astype(np.float32),
             "cpg": np.concatenate([self.cpg.params, self.cpg.rates]).astype(np.float32),
         }
-        sensed = self.sense(self.task.sensors, base=(pos, quat))
-        if "heightmap" in sensed:
-            obs["heightmap"] = sensed["heightmap"].reshape(-1)
-        if "rgb" in sensed:
-            obs["rgb"] = sensed["rgb"]
+        sensed = self.sense(self._observed, base=(pos, quat))
+        for name in self._observed:
+            obs[name] = registry.get(name).observation(sensed[name])
         return obs
 
-    def sense(self, modalities, base=None) -> dict[str, np.ndarray]:
-        """Read terrain sensors now: `heightmap` (rows x cols, m above the stance plane) and/or `rgb`.
+    def sense(self, names: Iterable[str], base: tuple[np.ndarray, np.ndarray] | None = None) -> dict[str, np.ndarray]:
+        """Read the named sensors now (their readings, `Sensor.frame_shape`), e.g. `heightmap` (rows x cols, m
+        above the stance plane), `rgb`, `contacts`.
 
         Independent of the observation's sensors, so a logger can record images on the steps it keeps only.
         """
+        view = self.view(base)
+        return {name: self.reader(name)(view) for name in names}
+
+    def reader(self, name: str) -> Callable[[registry.SimView], np.ndarray]:
+        """This env's reader of sensor `name` (made on first use: a camera only when something looks)."""
+        reader = self._readers.get(name)
+        if reader is None:
+            reader = self._readers[name] = registry.get(name).reader(self.sensor_cfg)
+        return reader
+
+    def view(self, base: tuple[np.ndarray, np.ndarray] | None = None) -> registry.SimView:
+        """What sensors read now; base: the base (position, quaternion) when already known."""
         pos, quat = base if base is not None else self.robot.base_state()[:2]
-        out: dict[str, np.ndarray] = {}
-        if "heightmap" in modalities:
-            plane = pos[2] - self.sim_cfg.body_height
-            grid = self.heightmap.read(self.terrain, pos[:2], quat_to_yaw(quat), plane)
-            out["heightmap"] = np.clip(grid, -5.0, 5.0)
-        if "rgb" in modalities:
-            if self.camera is None:
-                self.camera = Camera(self.sensor_cfg, self.client)
-            out["rgb"] = self.camera.read(pos, quat)
-        return out
+        return registry.SimView(self.client, self.robot, self.terrain, pos, quat, self.sim_cfg.body_height)
 
     def _zero_observation(self) -> dict[str, np.ndarray]:
         return {k: np.zeros(s.shape, dtype=s.dtype) for k, s in self.observation_space.spaces.items()}
@@ -270,6 +293,35 @@ class HexapodEnv(gym.Env):
             "power": power,  # W, mean mechanical joint power over the last control step
             "energy": self.energy,  # J since reset
         }
+
+    # -- snapshots for the recorder ----------------------------------------------------------------------------
+    def scene(self) -> EnvScene:
+        """The realised terrain and the robot's geometry (fixed until the next reset)."""
+        t = self.terrain
+        return EnvScene(t.name, t.to_dict(), t.boxes, t.heightfields, robot_shapes(self.robot_spec))
+
+    def state(self, sensors: Iterable[str] = ()) -> EnvState:
+        """The env now, with the named sensors read: what the recorder logs for one step."""
+        poses = self.robot.link_poses()
+        base_pos, base_quat = poses[0]
+        names = ["base_link", *self.robot_spec.link_names]
+        transforms = [(WORLD_FRAME, name, pos, quat) for name, (pos, quat) in zip(names, poses, strict=True)]
+        plane = np.array([base_pos[0], base_pos[1], base_pos[2] - self.sim_cfg.body_height])
+        transforms.append((WORLD_FRAME, HEADING_FRAME, plane, _yaw_quaternion(quat_to_yaw(base_quat))))
+        for sensor in registry.SENSORS.values():
+            transforms.extend(sensor.frames(self.sensor_cfg))
+        q, dq, tau = self.robot.joint_states()
+        info = self.last_info
+        return EnvState(
+            step=self.steps, time=self.steps * self.control_dt, terrain=self.terrain.name,
+            transforms=tuple(transforms), joint_names=tuple(self.robot_spec.joint_names),
+            joint_position=q, joint_velocity=dq, joint_effort=tau,
+            cpg_params=self.cpg.params.copy(), cpg_rates=self.cpg.rates.copy(), cpg_xy=self.cpg.xy.copy(),
+            reward_terms=info["reward_terms"] or dict.fromkeys(self._reward_terms(0.0, 0.0), 0.0),
+            power=float(info["power"]), energy=float(info["energy"]), distance=float(info["distance"]),
+            termination=info["termination"], labels=self.terrain_labels(),
+            readings=self.sense(sensors, base=(base_pos, base_quat)),
+        )
 
     # -- extras for logging and video --------------------------------------------------------------------------
     def obstacle_distance(self) -> float:
@@ -307,3 +359,7 @@ class HexapodEnv(gym.Env):
             with suppress(Exception):  # already disconnected
                 self._p.disconnect(physicsClientId=self.client)
             self.client = None
+
+
+def _observing(task: TaskConfig, obs_sensors: Iterable[str] | None) -> TaskConfig:
+    return task if obs_sensors is None else task.model_copy(update={"sensors": tuple(obs_sensors)})

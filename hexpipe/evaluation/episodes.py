@@ -45,6 +45,7 @@ class EpisodeResult:
     row: dict[str, Any]  # one line of results.csv
     trace: np.ndarray  # (steps + 1, len(TRACE_COLUMNS)) float32: the CPG parameters against time and distance
     obstacles: list[tuple[float, float]] = field(default_factory=list)  # x-extents of blocks/bumps (m from start)
+    feet: np.ndarray | None = None  # (steps + 1, legs) bool foot contact (episode 0 only): the gait diagram's data
 
 
 def _obstacles(env: HexapodEnv) -> list[tuple[float, float]]:
@@ -74,6 +75,11 @@ def lift_before_and_away(trace: np.ndarray, obstacles: list[tuple[float, float]]
     return tuple(float(b[mask].mean()) if mask.any() else math.nan for mask in (before, ~near))
 
 
+def _feet(env: HexapodEnv) -> np.ndarray:
+    """Which feet touch the ground now (the contacts sensor's first row), legs in the robot's order."""
+    return env.sense(("contacts",))["contacts"][0] > 0
+
+
 def _trace_row(info: dict[str, Any]) -> list[float]:
     return [info["time"], info["distance"], *map(float, info["cpg"])]
 
@@ -93,9 +99,8 @@ def run_episode(params: Params, job: EpisodeJob, on_step: StepHook | None = None
         torch.set_num_threads(1)  # one core per worker
     start = time.perf_counter()
     controller = build(job.controller, params)
-    env = HexapodEnv(
-        job.scenario.recipe, sim=params.sim, cpg=params.cpg, sensors=params.sensors,
-        task=params.task.model_copy(update={"sensors": controller.sensors}), initial_cpg=controller.initial_cpg,
+    env = HexapodEnv.from_params(
+        params, job.scenario.recipe, obs_sensors=controller.sensors, initial_cpg=controller.initial_cpg,
         render_mode="rgb_array" if job.video else None,
     )
     try:
@@ -107,19 +112,22 @@ def run_episode(params: Params, job: EpisodeJob, on_step: StepHook | None = None
                 meta = episode_metadata(env, job.seed, params.model_dump_json(), index=job.index,
                                         controller=job.controller.name, policy_dir=job.controller.policy_dir or "")
                 log = stack.enter_context(EpisodeLog(env, job.mcap, meta, log_every=params.collect.log_every))
-                log.step(0.0, info, force=True)
+                log.step(0.0, force=True)
             if job.video is not None:
                 video = stack.enter_context(Mp4Writer(job.video, fps=params.sim.control_hz))
                 video.add(env.render(), caption(env.terrain.name, info["time"], info["cpg"]))
             if on_step is not None:
                 on_step(env, 0.0, info, False)
             trace = [_trace_row(info)]
+            feet = [_feet(env)] if job.index == 0 else None
             while True:
                 obs, reward, terminated, truncated, info = env.step(controller.act(obs))
                 ended = terminated or truncated
                 trace.append(_trace_row(info))
+                if feet is not None:
+                    feet.append(_feet(env))
                 if log is not None:
-                    log.step(reward, info, force=ended)
+                    log.step(reward, force=ended)
                 if video is not None:
                     video.add(env.render(), caption(env.terrain.name, info["time"], info["cpg"]))
                 if on_step is not None:
@@ -146,4 +154,4 @@ def run_episode(params: Params, job: EpisodeJob, on_step: StepHook | None = None
         "cost_of_transport": cost_of_transport(float(info["energy"]), mass, float(info["distance"])),
         "wall_s": time.perf_counter() - start,
     }
-    return EpisodeResult(job, row, cpg, obstacles)
+    return EpisodeResult(job, row, cpg, obstacles, None if feet is None else np.array(feet))

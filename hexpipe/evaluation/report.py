@@ -91,6 +91,30 @@ def plot_cpg(result: EpisodeResult, path: Path, initial: tuple[float, float, flo
     _save(fig, path)
 
 
+def _has_feet(result: EpisodeResult | None) -> bool:
+    return result is not None and result.feet is not None and len(result.feet) > 0
+
+
+def plot_gait(result: EpisodeResult, path: Path) -> None:
+    """The gait diagram: stance (dark) and swing (light) of every leg against time, with each leg's duty factor."""
+    from matplotlib.figure import Figure
+
+    feet = result.feet
+    t = result.trace[:, TRACE_COLUMNS.index("time")]
+    dt = float(t[1] - t[0]) if len(t) > 1 else 1.0
+    fig = Figure(figsize=(10, 2.8), layout="constrained")
+    ax = fig.subplots()
+    ax.imshow(feet.T, aspect="auto", cmap="Greys", vmin=0, vmax=1.25, interpolation="nearest",
+              extent=(t[0] - dt / 2, t[-1] + dt / 2, feet.shape[1] + 0.5, 0.5))
+    ax.set_yticks(range(1, feet.shape[1] + 1), [f"leg {k} ({feet[:, k - 1].mean():.0%})"
+                                                 for k in range(1, feet.shape[1] + 1)])
+    ax.set_xlabel("time (s)")
+    row = result.row
+    ax.set_title(f"{row['terrain']}: policy, seed {row['seed']}: feet on the ground (dark: stance; duty factor in "
+                 "brackets; legs 1/2 front, 3/4 middle, 5/6 back, odd left)", fontsize=9)
+    _save(fig, path)
+
+
 def plot_success(table: Table, terrains: Sequence[str], controllers: Sequence[str], path: Path) -> None:
     """Grouped bars: success rate per terrain, one bar per controller, with its 95% Wilson interval."""
     from matplotlib.figure import Figure
@@ -245,7 +269,7 @@ def markdown(table: Table, inputs: ReportInputs) -> str:
     terrains, controllers = inputs.terrains, inputs.controllers
     figures = ["![success rate](success.png)"] + [
         f"![CPG parameters on {t}](cpg_{t}.png)" for t in terrains if t in inputs.first_policy_episodes
-    ]
+    ] + [f"![gait diagram on {t}](gait_{t}.png)" for t in terrains if _has_feet(inputs.first_policy_episodes.get(t))]
     recordings = [f"- `{t}`: video `{inputs.videos[t]}`" for t in terrains if t in inputs.videos]
     recordings += [f"- `{t}`: MCAP " + ", ".join(f"`{p}`" for p in inputs.mcaps[t]) for t in terrains
                    if inputs.mcaps.get(t)]
@@ -273,7 +297,8 @@ def markdown(table: Table, inputs: ReportInputs) -> str:
         "evaluation seeds).\n\n" + grid_table(inputs.grid),
         "## Figures\n\nThe CPG plots show the policy's first episode on each terrain: a, b and omega against forward "
         "distance with the blocks (and bumpy ground) shaded (the paper, section 4.2: a grows for long strides, b "
-        "rises before a block).\n\n" + "\n\n".join(figures),
+        "rises before a block). The gait diagrams show the same episodes' foot contacts: stance (dark) and swing "
+        "(light) of every leg against time, the figure locomotion people read first.\n\n" + "\n\n".join(figures),
     ]
     if recordings:
         parts.append("## Recordings\n\n" + "\n".join(recordings))
@@ -294,10 +319,16 @@ def write_reports(report_dir: Path, rows: pd.DataFrame, table: Table, inputs: Re
     for stale in report_dir.glob("cpg_*.png"):  # terrains of an earlier run
         if stale.stem.removeprefix("cpg_") not in inputs.first_policy_episodes:
             stale.unlink()
+    for stale in report_dir.glob("gait_*.png"):
+        if not _has_feet(inputs.first_policy_episodes.get(stale.stem.removeprefix("gait_"))):
+            stale.unlink()
     for terrain, result in inputs.first_policy_episodes.items():
         path = report_dir / f"cpg_{terrain}.png"
         plot_cpg(result, path, inputs.cpg_initial, inputs.goal_distance)
         written.append(path)
+        if _has_feet(result):
+            plot_gait(result, report_dir / f"gait_{terrain}.png")
+            written.append(report_dir / f"gait_{terrain}.png")
     write_text(report_dir / "report.md", markdown(table, inputs))
     learned = [c for c in LEARNED if c in inputs.controllers]
     metrics = {**table, **summary_numbers(table, inputs.terrains, learned)}  # terrains keep the suite's order

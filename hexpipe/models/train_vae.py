@@ -33,6 +33,7 @@ from rich.progress import (
     TimeRemainingColumn,
 )
 
+from hexpipe import sensors as registry
 from hexpipe.config import VaeConfig
 from hexpipe.models.vae import (
     DEFAULT_CHANNELS,
@@ -115,7 +116,7 @@ class VaeDataset:
 
 def _quantise(x: np.ndarray, modality: str) -> np.ndarray:
     """Compact storage of preprocess() output: lossless for rgb at native size, <= 2.5e-4 for heights."""
-    if modality == "rgb":
+    if registry.get(modality).image.store_uint8:
         return np.rint(x * 255.0).astype(np.uint8)
     return x.astype(np.float16)
 
@@ -138,8 +139,8 @@ def build_dataset(frames: Iterable[Frame], modality: str, image_size: int, sourc
 
     for frame in frames:
         n_frames += 1
-        present.update(name for name in ("rgb", "heightmap") if getattr(frame, name) is not None)
-        raw = getattr(frame, modality)
+        present.update(frame.sensors)
+        raw = frame.sensors.get(modality)
         if raw is None:
             continue
         raw = np.asarray(raw)
@@ -207,8 +208,8 @@ def _present_modalities(folder: Path) -> set[str]:
     present: set[str] = set()
     try:
         for i, frame in enumerate(iter_frames(folder)):
-            present.update(name for name in ("rgb", "heightmap") if getattr(frame, name) is not None)
-            if i >= 50 or len(present) == 2:
+            present.update(frame.sensors)
+            if i >= 50 or len(present) == len(registry.SENSORS):
                 break
     except RecordingError:
         pass

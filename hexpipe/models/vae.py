@@ -18,6 +18,7 @@ import numpy as np
 import torch
 from torch import Tensor, nn
 
+from hexpipe import sensors as registry
 from hexpipe.atomic import write_text
 from hexpipe.models.weights import WeightsError, load_state_dict, save_state_dict
 
@@ -30,9 +31,7 @@ ENCODER_FORMAT_VERSION = 1
 # 32 channels at full resolution and the deep width, at ~1.65x the speed (see benchmarks/bench_vae.py).
 DEFAULT_CHANNELS: tuple[int, int, int, int] = (32, 32, 64, 128)
 
-# Height maps are in metres relative to the stance plane. This window covers a dip of 15 cm and a raised block
-# of up to 25 cm (the tallest the hexapod is asked to climb is well below that); flat ground maps to 0.375.
-HEIGHTMAP_RANGE_M: tuple[float, float] = (-0.15, 0.25)
+HEIGHTMAP_RANGE_M = registry.get("heightmap").image.low, registry.get("heightmap").image.high  # m (the sensor's)
 
 
 class EncoderError(ValueError):
@@ -43,8 +42,8 @@ class EncoderError(ValueError):
 class Normalisation:
     """Affine map of a raw sensor value to [0, 1]: clip((x - low) / (high - low), 0, 1).
 
-    rgb: low=0, high=255 (uint8 intensity). heightmap: HEIGHTMAP_RANGE_M (metres); out-of-window heights are
-    clipped and non-finite cells (no ray hit) are treated as `low`.
+    Each image sensor declares its window (`hexpipe.sensors`, `ImagePrep`): rgb 0..255 (uint8 intensity),
+    heightmap HEIGHTMAP_RANGE_M (metres; non-finite cells, no ray hit, are treated as `low`).
     """
 
     low: float
@@ -53,41 +52,45 @@ class Normalisation:
 
     @classmethod
     def for_modality(cls, modality: str) -> Normalisation:
-        if modality == "rgb":
-            return cls(0.0, 255.0, "uint8 intensity")
-        if modality == "heightmap":
-            return cls(*HEIGHTMAP_RANGE_M, "m")
-        raise ValueError(f"unknown modality {modality!r}; expected 'rgb' or 'heightmap'")
+        prep = _prep(modality)
+        return cls(prep.low, prep.high, prep.units)
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
 
 
+def _prep(modality: str) -> registry.ImagePrep:
+    prep = registry.get(modality).image
+    if prep is None:
+        raise ValueError(f"sensor {modality!r} is not an image the VAE can encode; use one of "
+                         f"{', '.join(registry.image_sensors())}")
+    return prep
+
+
 def channels_for(modality: str) -> int:
     """Input channels of the VAE for a sensor: 3 for rgb, 1 for a height map."""
-    return 3 if modality == "rgb" else 1
+    return _prep(modality).channels
 
 
 def preprocess(raw: np.ndarray, modality: str, image_size: int, norm: Normalisation | None = None) -> np.ndarray:
     """Raw sensor batch -> float32 (N, C, image_size, image_size) in [0, 1]; used by training and encoder.
 
-    rgb: (N, H, W, 3) uint8. heightmap: (N, R, C) float metres. Values are normalised (and clipped) first,
-    then resized with cv2.INTER_AREA, so a clipped spike cannot bleed into its neighbours.
+    rgb: (N, H, W, 3) uint8. heightmap: (N, R, C) float metres (`ImagePrep.describe`). Values are normalised
+    (and clipped) first, then resized with cv2.INTER_AREA, so a clipped spike cannot bleed into its neighbours.
     """
+    prep = _prep(modality)
     norm = norm or Normalisation.for_modality(modality)
     raw = np.asarray(raw)
-    expected_ndim = 4 if modality == "rgb" else 3
-    if raw.ndim != expected_ndim or (modality == "rgb" and raw.shape[-1] != 3):
-        want = "(N, H, W, 3) uint8" if modality == "rgb" else "(N, R, C) float"
-        raise ValueError(f"{modality} batch must be {want}, got shape {raw.shape}")
+    if raw.ndim != (4 if prep.channels_last else 3) or (prep.channels_last and raw.shape[-1] != prep.channels):
+        raise ValueError(f"{modality} batch must be {prep.describe()}, got shape {raw.shape}")
     x = raw.astype(np.float32)
-    if modality == "heightmap":
+    if prep.nonfinite_to_low:
         x = np.nan_to_num(x, nan=norm.low, posinf=norm.high, neginf=norm.low)
     x = np.clip((x - norm.low) / (norm.high - norm.low), 0.0, 1.0)
     if x.shape[1:3] != (image_size, image_size):
         size = (image_size, image_size)
         x = np.stack([cv2.resize(img, size, interpolation=cv2.INTER_AREA) for img in x])
-    if modality == "rgb":
+    if prep.channels_last:
         return np.ascontiguousarray(x.transpose(0, 3, 1, 2))
     return x[:, None]
 
@@ -244,8 +247,9 @@ class FrozenEncoder:
                 f"{self.modality} encoder was trained on frames of shape {self.input_shape}, got batch "
                 f"{batch.shape}; match the sensor config or retrain the VAE"
             )
-        if self.modality == "rgb" and batch.dtype != np.uint8:
-            raise EncoderError(f"rgb encoder expects uint8 frames, got {batch.dtype}")
+        dtype = _prep(self.modality).dtype
+        if dtype is not None and batch.dtype != np.dtype(dtype):
+            raise EncoderError(f"{self.modality} encoder expects {dtype} frames, got {batch.dtype}")
         x = preprocess(batch, self.modality, self.image_size, self.normalisation)
         with torch.inference_mode():
             mu, _ = self._net(torch.from_numpy(x))

@@ -24,9 +24,8 @@ from mcap.reader import SeekingReader
 from mcap.records import Channel, DataEnd, Footer, Message, Schema
 from mcap.stream_reader import StreamReader
 
-from hexpipe.recording.writer import TOPIC_HEIGHTMAP, TOPIC_IMAGE, TOPIC_STEP
-
-MODALITY_TOPICS = {"rgb": TOPIC_IMAGE, "heightmap": TOPIC_HEIGHTMAP}
+from hexpipe import sensors as registry
+from hexpipe.recording.writer import TOPIC_STEP
 
 _MAGIC = b"\x89MCAP0\r\n"
 _FOOTER = struct.Struct("<BQQQI")  # opcode, record length, summary_start, summary_offset_start, summary_crc
@@ -46,8 +45,8 @@ class Frame:
 
     episode: str  # file stem
     step: int  # index of the logged step within the file (0, 1, ...), not the env step
-    rgb: np.ndarray | None  # H x W x 3 uint8, exactly as logged
-    heightmap: np.ndarray | None  # R x C float32 (m), exactly as logged
+    sensors: dict[str, np.ndarray]  # sensor name -> reading exactly as logged (e.g. rgb H x W x 3 uint8); absent
+    # when not logged at this step or not asked for
     meta: dict[str, Any]  # the step's /step message, plus "terrain" (name) when the file records one
 
 
@@ -84,16 +83,17 @@ def count_messages(path: Path) -> dict[str, int]:
     return counts
 
 
-def iter_frames(path_or_folder: Path, modalities: Sequence[str] = ("rgb", "heightmap")) -> Iterator[Frame]:
+def iter_frames(path_or_folder: Path, modalities: Sequence[str] | None = None) -> Iterator[Frame]:
     """Yield every logged step of one file, or of a folder's episodes (see `_episode_files`) in sorted name order.
 
     A step's messages share a log time; a step without a /step message is incomplete and skipped. Only the
-    requested modalities are decoded (the others are None). A bad file raises `RecordingError` when reached,
+    requested sensors (default: every registered one) are decoded. A bad file raises `RecordingError` when reached,
     possibly after its good steps were yielded (the data-section CRC is known only at the end).
     """
-    unknown = set(modalities) - MODALITY_TOPICS.keys()
+    modalities = registry.names() if modalities is None else modalities
+    unknown = set(modalities) - set(registry.names())
     if unknown:
-        raise ValueError(f"modalities: unknown {sorted(unknown)}; allowed: {sorted(MODALITY_TOPICS)}")
+        raise ValueError(f"modalities: unknown {sorted(unknown)}; allowed: {sorted(registry.names())}")
     for path in _episode_files(Path(path_or_folder)):
         yield from _iter_file(path, frozenset(modalities))
 
@@ -116,7 +116,8 @@ def _episode_files(path: Path) -> list[Path]:
 def _iter_file(path: Path, modalities: frozenset[str]) -> Iterator[Frame]:
     metadata = read_metadata(path)  # also validates the tail, so truncation fails before any frame
     terrain = metadata.get("episode", {}).get("terrain") or metadata.get("terrain", {}).get("name")
-    wanted = {TOPIC_STEP} | {MODALITY_TOPICS[m] for m in modalities}
+    by_topic = {registry.get(m).topic: registry.get(m) for m in modalities}
+    wanted = {TOPIC_STEP, *by_topic}
     topics: dict[int, str] = {}
     index = 0
     pending_time: int | None = None
@@ -127,13 +128,13 @@ def _iter_file(path: Path, modalities: frozenset[str]) -> Iterator[Frame]:
             return None
         try:
             meta = json.loads(pending[TOPIC_STEP])
-            rgb = _decode_image(pending[TOPIC_IMAGE]) if TOPIC_IMAGE in pending else None
-            heightmap = _decode_grid(pending[TOPIC_HEIGHTMAP]) if TOPIC_HEIGHTMAP in pending else None
-        except (ValueError, IndexError, struct.error) as exc:
+            readings = {sensor.name: sensor.decode(_DECODERS[sensor.kind](pending[topic]))
+                        for topic, sensor in by_topic.items() if topic in pending}
+        except (ValueError, IndexError, KeyError, TypeError, struct.error) as exc:
             raise RecordingError(f"{path}: bad message at log time {pending_time} ({_one_line(exc)})") from None
         if terrain is not None:
             meta.setdefault("terrain", terrain)
-        return Frame(episode=path.stem, step=index, rgb=rgb, heightmap=heightmap, meta=meta)
+        return Frame(episode=path.stem, step=index, sensors=readings, meta=meta)
 
     seen_data_end = False
     with _open(path) as stream:
@@ -314,3 +315,6 @@ def _decode_grid(buf: bytes) -> np.ndarray:
     if cell_stride != 4 or row_stride != 4 * columns or columns == 0 or len(data) % row_stride:
         raise ValueError(f"unsupported grid: {columns} columns, strides {row_stride}/{cell_stride}")
     return np.frombuffer(data, "<f4").reshape(-1, columns).T.astype(np.float32, order="C")
+
+
+_DECODERS: dict[str, Callable[[bytes], Any]] = {"image": _decode_image, "grid": _decode_grid, "json": json.loads}

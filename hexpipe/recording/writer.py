@@ -4,9 +4,11 @@ Topics (all times are the caller's `t_ns`, nanoseconds of sim time, used as log 
 
 - `/terrain`       foxglove.SceneUpdate      boxes as cubes, heightfields as triangle meshes, frame "world"
 - `/tf`            foxglove.FrameTransforms  one per step
-- `/camera/image`  foxglove.RawImage         rgb8, frame "camera" (raw, so the bytes read back exactly)
-- `/heightmap`     foxglove.Grid             one float32 "height" field per cell, frame "heading"
 - `/joint_states`, `/cpg`, `/step`           JSON with a JSON schema, so Foxglove can plot e.g. `/cpg.a`
+- one topic per sensor reading (`hexpipe.sensors`), by the message kind the sensor declares:
+  image  foxglove.RawImage  rgb8 (raw, so the bytes read back exactly), e.g. `/camera/image` in frame "camera"
+  grid   foxglove.Grid      one float32 "height" field per cell, e.g. `/heightmap` in frame "heading"
+  json   JSON with a JSON schema, e.g. `/contacts`
 
 Foxglove types are protobuf-encoded by foxglove-sdk; chunks are zstd-compressed (1 MiB), CRC'd and indexed.
 The file appears at `path` only when the writer closes cleanly: it is written to `<path>.tmp` and renamed.
@@ -51,15 +53,11 @@ from foxglove.messages import (
 TOPIC_TERRAIN = "/terrain"
 TOPIC_ROBOT = "/robot"
 TOPIC_TF = "/tf"
-TOPIC_IMAGE = "/camera/image"
-TOPIC_HEIGHTMAP = "/heightmap"
 TOPIC_JOINTS = "/joint_states"
 TOPIC_CPG = "/cpg"
 TOPIC_STEP = "/step"
 
 WORLD_FRAME = "world"
-CAMERA_FRAME = "camera"
-HEADING_FRAME = "heading"
 HEIGHT_FIELD = "height"  # the one Grid field name; the Foxglove layout colours and raises cells by it
 
 # foxglove-sdk's defaults spelled out (zstd chunks of ~1 MiB, CRCs, indexes, statistics), except that chunks
@@ -111,9 +109,25 @@ class HeightfieldLike(Protocol):
 
 
 Transform = tuple[str, str, np.ndarray, np.ndarray]  # parent, child, translation xyz (m), quaternion xyzw
-# Grid corner position xyz (m) and orientation xyzw in the "heading" frame, cell size (m): one number, or
+# Grid corner position xyz (m) and orientation xyzw in the grid's frame, cell size (m): one number, or
 # (along the grid's x, along its y).
-HeightmapPose = tuple[np.ndarray, np.ndarray, float | tuple[float, float]]
+GridPose = tuple[np.ndarray, np.ndarray, float | tuple[float, float]]
+
+
+class SensorMessage(Protocol):
+    """One sensor reading to log (`hexpipe.sensors.Message`): kind "image" (payload H x W x 3 uint8), "grid"
+    (payload (R x C float32, GridPose)) or "json" (payload a dict; its schema titled `schema`)."""
+
+    @property
+    def topic(self) -> str: ...
+    @property
+    def kind(self) -> str: ...
+    @property
+    def payload(self) -> Any: ...
+    @property
+    def frame_id(self) -> str: ...
+    @property
+    def schema(self) -> str: ...
 
 
 class EpisodeWriter:
@@ -141,6 +155,7 @@ class EpisodeWriter:
         self._closed = False
         self._last_step_ns: int | None = None
         self._json: dict[str, foxglove.Channel] = {}  # made on first use; schema from that message
+        self._sensor_channels: dict[str, Any] = {}  # image and grid topics, made on first use
         self._grid_fields = [
             PackedElementField(name=HEIGHT_FIELD, offset=0, type=PackedElementFieldNumericType.Float32)
         ]
@@ -159,8 +174,6 @@ class EpisodeWriter:
             self._scene = SceneUpdateChannel(TOPIC_TERRAIN, context=self._context)
             self._robot = SceneUpdateChannel(TOPIC_ROBOT, context=self._context)
             self._tf = FrameTransformsChannel(TOPIC_TF, context=self._context)
-            self._image = RawImageChannel(TOPIC_IMAGE, context=self._context)
-            self._grid = GridChannel(TOPIC_HEIGHTMAP, context=self._context)
         except BaseException:
             self._abort()
             raise
@@ -220,19 +233,18 @@ class EpisodeWriter:
         t_ns: int,
         *,
         transforms: Sequence[Transform],
-        rgb: np.ndarray | None = None,
-        heightmap: np.ndarray | None = None,
-        heightmap_pose: HeightmapPose | None = None,
+        sensors: Sequence[SensorMessage] = (),
         joints: Mapping[str, Any],
         cpg: Mapping[str, Any],
         step: Mapping[str, Any],
     ) -> None:
         """Log one control step; all its messages share log time `t_ns`, which must increase step to step.
 
-        rgb: H x W x 3 uint8. heightmap: R x C float32 heights (m), cell [r, c] the r-th along the grid's +x
-        and the c-th along its +y, as everywhere in hexpipe (HeightField, HeightMapSensor: rows forward,
-        columns leftward); heightmap_pose places the grid's corner (see `HeightmapPose`). Foxglove's Grid
-        runs columns along +x, so the array is stored transposed; the reader transposes it back.
+        sensors: the readings, each on its topic (see `SensorMessage`). An image is H x W x 3 uint8. A grid is
+        R x C float32 heights (m), cell [r, c] the r-th along the grid's +x and the c-th along its +y, as
+        everywhere in hexpipe (HeightField, the height map: rows forward, columns leftward), its pose placing the
+        grid's corner (see `GridPose`); Foxglove's Grid runs columns along +x, so the array is stored transposed
+        and the reader transposes it back.
         Non-finite floats in the JSON topics are written as null (JSON has no NaN/inf).
         """
         if self._last_step_ns is not None and t_ns <= self._last_step_ns:
@@ -253,12 +265,15 @@ class EpisodeWriter:
                 )
             )
         self._tf.log(FrameTransforms(transforms=frames), log_time=t_ns)
-        if rgb is not None:
-            self._log_image(t_ns, stamp, rgb)
-        if heightmap is not None:
-            if heightmap_pose is None:
-                raise ValueError("log_step: heightmap needs heightmap_pose (origin, quaternion, cell)")
-            self._log_heightmap(t_ns, stamp, heightmap, heightmap_pose)
+        for message in sensors:
+            if message.kind == "image":
+                self._log_image(message.topic, t_ns, stamp, message.payload, message.frame_id)
+            elif message.kind == "grid":
+                self._log_grid(message.topic, t_ns, stamp, *message.payload, message.frame_id)
+            elif message.kind == "json":
+                self._log_json(message.topic, t_ns, message.payload, message.schema)
+            else:
+                raise ValueError(f"log_step: {message.topic} has unknown message kind {message.kind!r}")
         self._log_json(TOPIC_JOINTS, t_ns, joints)
         self._log_json(TOPIC_CPG, t_ns, cpg)
         self._log_json(TOPIC_STEP, t_ns, step)  # last: a step is complete once its /step is written
@@ -294,30 +309,37 @@ class EpisodeWriter:
                 self._tmp.unlink(missing_ok=True)
 
     def _close_channels(self) -> None:
-        for name in ("_scene", "_robot", "_tf", "_image", "_grid"):
+        for name in ("_scene", "_robot", "_tf"):
             if hasattr(self, name):  # absent when __init__ failed part-way
                 getattr(self, name).close()
-        for channel in self._json.values():
+        for channel in [*self._sensor_channels.values(), *self._json.values()]:
             channel.close()
 
-    def _log_image(self, t_ns: int, stamp: Timestamp, rgb: np.ndarray) -> None:
+    def _channel(self, topic: str, make: Any) -> Any:
+        channel = self._sensor_channels.get(topic)
+        if channel is None:
+            channel = self._sensor_channels[topic] = make(topic, context=self._context)
+        return channel
+
+    def _log_image(self, topic: str, t_ns: int, stamp: Timestamp, rgb: np.ndarray, frame_id: str) -> None:
         if rgb.dtype != np.uint8 or rgb.ndim != 3 or rgb.shape[2] != 3:
-            raise ValueError(f"log_step: rgb must be H x W x 3 uint8, got {rgb.shape} {rgb.dtype}")
+            raise ValueError(f"log_step: {topic} must be H x W x 3 uint8, got {rgb.shape} {rgb.dtype}")
         height, width = rgb.shape[:2]
         message = RawImage(
             timestamp=stamp,
-            frame_id=CAMERA_FRAME,
+            frame_id=frame_id,
             width=width,
             height=height,
             encoding="rgb8",
             step=3 * width,
             data=rgb.tobytes(),  # C order, whatever the input's strides
         )
-        self._image.log(message, log_time=t_ns)
+        self._channel(topic, RawImageChannel).log(message, log_time=t_ns)
 
-    def _log_heightmap(self, t_ns: int, stamp: Timestamp, heightmap: np.ndarray, pose: HeightmapPose) -> None:
+    def _log_grid(self, topic: str, t_ns: int, stamp: Timestamp, heightmap: np.ndarray, pose: GridPose,
+                  frame_id: str) -> None:
         if heightmap.ndim != 2:
-            raise ValueError(f"log_step: heightmap must be R x C, got shape {heightmap.shape}")
+            raise ValueError(f"log_step: {topic} must be R x C, got shape {heightmap.shape}")
         origin, quaternion, cell = pose
         cell_x, cell_y = np.broadcast_to(np.asarray(cell, float), 2).tolist()  # one number or (x, y)
         rows = heightmap.shape[0]  # = Foxglove columns, along +x
@@ -325,7 +347,7 @@ class EpisodeWriter:
         qx, qy, qz, qw = np.asarray(quaternion, float).tolist()
         message = Grid(
             timestamp=stamp,
-            frame_id=HEADING_FRAME,
+            frame_id=frame_id,
             pose=Pose(position=Vector3(x=x, y=y, z=z), orientation=Quaternion(x=qx, y=qy, z=qz, w=qw)),
             column_count=rows,
             cell_size=Vector2(x=cell_x, y=cell_y),
@@ -334,15 +356,15 @@ class EpisodeWriter:
             fields=self._grid_fields,
             data=np.ascontiguousarray(heightmap.T, dtype="<f4").tobytes(),
         )
-        self._grid.log(message, log_time=t_ns)
+        self._channel(topic, GridChannel).log(message, log_time=t_ns)
 
-    def _log_json(self, topic: str, t_ns: int, message: Mapping[str, Any]) -> None:
+    def _log_json(self, topic: str, t_ns: int, message: Mapping[str, Any], title: str = "") -> None:
         text = json.dumps(message, separators=(",", ":"), default=_json_default)
         if "NaN" in text or "Infinity" in text:  # rare; Foxglove's JSON.parse rejects these tokens
             text = json.dumps(_finite_or_none(message), separators=(",", ":"), default=_json_default)
         channel = self._json.get(topic)
         if channel is None:
-            schema = {"title": _JSON_SCHEMA_TITLES[topic], **_json_schema(message)}
+            schema = {"title": title or _JSON_SCHEMA_TITLES[topic], **_json_schema(message)}
             channel = self._json[topic] = foxglove.Channel(topic, schema=schema, context=self._context)
         channel.log(text.encode(), log_time=t_ns)
 

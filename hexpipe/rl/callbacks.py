@@ -18,7 +18,8 @@ class EpisodeStats(BaseCallback):
     """Collects finished episodes (reward, distance, success, termination) and logs them per rollout.
 
     Logged against timesteps to dvclive (`episode/*`, `train/*` losses, `time/steps_per_s`): the paper's figure 6
-    (episode reward against time) as a DVC plot, plus success rate and distance.
+    (episode reward against time) as a DVC plot, plus success rate and distance, and one curve per reward term
+    (`episode/reward_<term>`, the env's `info["reward_terms"]` summed over the episode: forward, power).
     """
 
     def __init__(self, live: Any | None = None, window: int = 20, log_path: Path | None = None,
@@ -37,12 +38,14 @@ class EpisodeStats(BaseCallback):
             log_path.parent.mkdir(parents=True, exist_ok=True)
             log_path.write_text("".join(json.dumps(e) + "\n" for e in self.episodes))
         self._returns: np.ndarray | None = None
+        self._terms: list[dict[str, float]] = []  # per env: reward terms summed since its episode began
         self._rollout_start = time.perf_counter()
         self._rollout_steps = 0
         self.steps_per_s = 0.0
 
     def _on_training_start(self) -> None:
         self._returns = np.zeros(self.training_env.num_envs)
+        self._terms = [{} for _ in range(self.training_env.num_envs)]
 
     def _on_rollout_start(self) -> None:
         self._rollout_start = time.perf_counter()
@@ -56,15 +59,19 @@ class EpisodeStats(BaseCallback):
             rewards = original.get_original_reward()
         self._returns += rewards
         for i, done in enumerate(self.locals["dones"]):
+            info = self.locals["infos"][i]
+            terms = self._terms[i]
+            for name, value in info.get("reward_terms", {}).items():
+                terms[name] = terms.get(name, 0.0) + float(value)
             if done:
-                info = self.locals["infos"][i]
                 episode = {
                     "timesteps": self.num_timesteps, "reward": float(self._returns[i]),
                     "distance": float(info.get("distance", 0.0)), "success": bool(info.get("success", False)),
-                    "termination": info.get("termination") or "time_limit",
+                    "termination": info.get("termination") or "time_limit", "reward_terms": terms,
                 }
                 self.episodes.append(episode)
                 self._returns[i] = 0.0
+                self._terms[i] = {}
                 if self.log_path is not None:
                     with self.log_path.open("a") as f:
                         f.write(json.dumps(episode) + "\n")
@@ -74,8 +81,11 @@ class EpisodeStats(BaseCallback):
         last = self.episodes[-self.window:]
         if not last:
             return {}
+        names = dict.fromkeys(name for e in last for name in e.get("reward_terms", {}))
         return {
             "episode/reward": float(np.mean([e["reward"] for e in last])),
+            **{f"episode/reward_{name}": float(np.mean([e.get("reward_terms", {}).get(name, 0.0) for e in last]))
+               for name in names},
             "episode/distance": float(np.mean([e["distance"] for e in last])),
             "episode/success_rate": float(np.mean([e["success"] for e in last])),
             "episode/stuck_rate": float(np.mean([e["termination"] == "stuck" for e in last])),

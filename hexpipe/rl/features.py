@@ -25,9 +25,11 @@ class Encoder(Protocol):
 class TerrainFeatures(VecEnvWrapper):
     """Dict observations -> one float32 vector [body, cpg, embedding] (no embedding for a blind policy)."""
 
-    def __init__(self, venv: VecEnv, encoder: Encoder | None, heightmap_shape: tuple[int, int] | None = None):
+    def __init__(self, venv: VecEnv, encoder: Encoder | None, frame_shape: tuple[int, ...] | None = None):
+        """frame_shape: one sensor reading's shape (`Sensor.frame_shape`), which the encoder takes; the observation
+        may hold it flattened (the height map). None: the observation's own shape."""
         self.encoder = encoder
-        self.heightmap_shape = heightmap_shape
+        self.frame_shape = frame_shape
         raw: spaces.Dict = venv.observation_space  # type: ignore[assignment]
         dim = sum(int(np.prod(raw[k].shape)) for k in PROPRIOCEPTIVE_KEYS)
         if encoder is not None:
@@ -43,8 +45,8 @@ class TerrainFeatures(VecEnvWrapper):
         parts = [np.asarray(obs[k], dtype=np.float32) for k in PROPRIOCEPTIVE_KEYS]
         if self.encoder is not None:
             sensor = np.asarray(obs[self.encoder.modality])
-            if self.encoder.modality == "heightmap" and self.heightmap_shape is not None:
-                sensor = sensor.reshape(len(sensor), *self.heightmap_shape)
+            if self.frame_shape is not None:
+                sensor = sensor.reshape(len(sensor), *self.frame_shape)
             parts.append(self.encoder.encode(sensor).astype(np.float32))
         return np.concatenate(parts, axis=1)
 

@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from hexpipe import sensors as registry
 from hexpipe.config import CpgConfig, Params, SensorConfig, SimConfig
 from hexpipe.rl.features import PROPRIOCEPTIVE_KEYS, Encoder
 from hexpipe.rl.inference import WEIGHTS, WEIGHTS_CONFIG, ObservationNormaliser, load_weights
@@ -27,12 +28,6 @@ from hexpipe.rl.train import POLICY_CONFIG
 
 POLICY_SUBDIR = "policy"  # train.py saves the policy files here
 _RETRAIN = "run `hexpipe train-ppo`"
-
-# Sensor settings that change what a modality's frames mean (not only their shape).
-_SENSOR_KEYS = {
-    "heightmap": ("heightmap_rows", "heightmap_cols", "heightmap_ahead", "heightmap_width"),
-    "rgb": ("camera_width", "camera_height", "camera_fov_deg", "camera_pitch_deg", "camera_mount"),
-}
 
 
 class PolicyError(ValueError):
@@ -75,9 +70,8 @@ class LoadedPolicy:
         """One observation -> (1, observation_dim) float32, laid out as `TerrainFeatures.features`."""
         parts = [np.asarray(obs[k], dtype=np.float32).reshape(1, -1) for k in PROPRIOCEPTIVE_KEYS]
         if self.encoder is not None:
-            sensor = np.asarray(obs[self.encoder.modality])[None]
-            if self.encoder.modality == "heightmap":
-                sensor = sensor.reshape(1, self.params.sensors.heightmap_rows, self.params.sensors.heightmap_cols)
+            frame_shape = registry.get(self.encoder.modality).frame_shape(self.params.sensors)
+            sensor = np.asarray(obs[self.encoder.modality]).reshape(1, *frame_shape)
             parts.append(self.encoder.encode(sensor).astype(np.float32))
         return np.concatenate(parts, axis=1)
 
@@ -183,7 +177,7 @@ def _load_matching_encoder(directory: Path, config: dict[str, Any], params: Para
     from hexpipe.models.vae import EncoderError, load_encoder
 
     modality, encoder_dir = config["modality"], config["encoder_dir"]
-    for key in _SENSOR_KEYS.get(modality, ()):
+    for key in registry.get(modality).config_keys:  # settings that change what its frames mean
         trained, now = config["sensors"].get(key), params.sensors.model_dump(mode="json")[key]
         if trained != now:
             raise PolicyError(
@@ -200,7 +194,7 @@ def _load_matching_encoder(directory: Path, config: dict[str, Any], params: Para
             f"found {encoder.modality} with latent_dim={encoder.latent_dim} at {encoder_dir}; the VAE was "
             f"retrained after the policy ({_RETRAIN})"
         )
-    shape = _frame_shape(params, modality)
+    shape = registry.get(modality).frame_shape(params.sensors)
     if tuple(encoder.input_shape) != shape:
         raise PolicyError(
             f"{directory}: encoder at {encoder_dir} expects {modality} frames of shape {tuple(encoder.input_shape)},"
@@ -209,23 +203,12 @@ def _load_matching_encoder(directory: Path, config: dict[str, Any], params: Para
     return encoder
 
 
-def _frame_shape(params: Params, modality: str) -> tuple[int, ...]:
-    s = params.sensors
-    return (s.heightmap_rows, s.heightmap_cols) if modality == "heightmap" else (s.camera_height, s.camera_width, 3)
-
-
 def _feature_dim(params: Params, encoder: Encoder | None) -> int:
     """Length of the feature vector the env (its observation space now) and encoder produce."""
     from hexpipe.envs.hexapod import HexapodEnv
 
-    sensors = () if encoder is None else (encoder.modality,)
-    env = HexapodEnv("flat", sim=params.sim, cpg=params.cpg, sensors=params.sensors,
-                     task=params.task.model_copy(update={"sensors": sensors}))
-    try:
-        spaces = env.observation_space.spaces
-        dim = sum(int(np.prod(spaces[k].shape)) for k in PROPRIOCEPTIVE_KEYS)
-    finally:
-        env.close()
+    spaces = HexapodEnv.observation_spec(params, obs_sensors=()).spaces
+    dim = sum(int(np.prod(spaces[k].shape)) for k in PROPRIOCEPTIVE_KEYS)
     return dim + (0 if encoder is None else encoder.latent_dim)
 
 

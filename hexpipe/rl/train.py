@@ -16,6 +16,7 @@ import numpy as np
 from stable_baselines3 import PPO
 from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecEnv, VecEnvWrapper, VecNormalize
 
+from hexpipe import sensors as registry
 from hexpipe.atomic import atomic_path, write_json, write_text
 from hexpipe.config import Params, params_hash
 from hexpipe.envs.hexapod import HexapodEnv
@@ -40,15 +41,12 @@ PPO_SPEED = ("time",)  # dvclive's time/* metrics: steps per second, measured, n
 def env_factory(params: Params, terrain: str, sensors: tuple[str, ...], randomize: bool) -> Callable[[], gym.Env]:
     """A picklable constructor for one environment (SubprocVecEnv builds it in the worker); with ppo.curriculum it
     keeps its own difficulty level (hexpipe/rl/curriculum.py)."""
-    task = params.task.model_copy(update={"sensors": sensors})
     parent = os.getpid()
 
     def make() -> gym.Env:
         die_with_parent(parent)  # in a SubprocVecEnv worker: no orphan after a kill -9 of train-ppo
-        env = HexapodEnv(
-            terrain, sim=params.sim, cpg=params.cpg, sensors=params.sensors, task=task, randomize=randomize
-        )
-        return Curriculum(env, goal=task.goal_distance) if params.ppo.curriculum else env
+        env = HexapodEnv.from_params(params, terrain, obs_sensors=sensors, randomize=randomize)
+        return Curriculum(env, goal=params.task.goal_distance) if params.ppo.curriculum else env
 
     return make
 
@@ -73,8 +71,8 @@ def load_terrain_encoder(params: Params):
 
 
 def wrap_features(venv: VecEnv, encoder, params: Params) -> TerrainFeatures:
-    shape = (params.sensors.heightmap_rows, params.sensors.heightmap_cols)
-    return TerrainFeatures(venv, encoder, heightmap_shape=shape)
+    shape = None if encoder is None else registry.get(encoder.modality).frame_shape(params.sensors)
+    return TerrainFeatures(venv, encoder, frame_shape=shape)
 
 
 class EnvClock(VecEnvWrapper):
@@ -297,9 +295,15 @@ def training_curve(episodes: list[dict[str, Any]], path: Path, window: int = 20)
         rate = np.convolve(success, np.ones(k) / k, mode="valid")
         ax_r.scatter(t, reward, s=4, alpha=0.3, label="episode")
         ax_r.plot(t[k - 1:], smooth, color="C1", label=f"mean of {k}")
+        terms = dict.fromkeys(name for e in episodes for name in e.get("reward_terms", {}))
+        for j, name in enumerate(terms):  # each term's share of the sum (forward, minus the power cost)
+            term = np.array([e.get("reward_terms", {}).get(name, 0.0) for e in episodes])
+            if np.any(term):
+                ax_r.plot(t[k - 1:], np.convolve(term, np.ones(k) / k, mode="valid"), color=f"C{3 + j}",
+                          linestyle="--", label=f"{name} term, mean of {k}")
         ax_s.plot(t[k - 1:], rate, color="C2")
         ax_r.legend(loc="lower right")
-    ax_r.set(xlabel="timesteps", ylabel="episode reward (100 x v_x summed)", title="Episode reward")
+    ax_r.set(xlabel="timesteps", ylabel="episode reward (sum of the terms)", title="Episode reward")
     ax_s.set(xlabel="timesteps", ylabel=f"success rate (last {window})", ylim=(-0.02, 1.02), title="Reaches 3 m")
     fig.tight_layout()
     with atomic_path(path) as tmp:
