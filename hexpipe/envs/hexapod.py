@@ -33,7 +33,7 @@ from hexpipe.sim.cpg import CPG
 from hexpipe.sim.gait import GaitMap, slew_path
 from hexpipe.sim.robot import Robot, RobotSpec
 from hexpipe.sim.sensors import Camera, HeightMapSensor
-from hexpipe.sim.terrain import Terrain, TerrainRecipe, load_terrain, realize
+from hexpipe.sim.terrain import Terrain, TerrainRecipe, build_terrain, load_terrain, realize
 
 TERMINATIONS = ("goal", "stuck", "fall", "nonfinite")
 
@@ -130,7 +130,7 @@ class HexapodEnv(gym.Env):
         )
         # options={"difficulty": d} (a curriculum's level, in [0, 1]) overrides a `varied` terrain's own difficulty
         self.terrain = realize(self.recipe, self.np_random, (options or {}).get("difficulty"))
-        self.terrain_bodies = self.terrain.build(c)
+        self.terrain_bodies = build_terrain(self.terrain, c)
 
         friction = self.terrain.friction or self.sim_cfg.friction
         mass_scale = 1.0
