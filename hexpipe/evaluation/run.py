@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import shlex
 import sys
 import time
@@ -23,6 +22,7 @@ from typing import Any
 
 import pandas as pd
 
+from hexpipe.atomic import atomic_path
 from hexpipe.config import Params
 from hexpipe.evaluation.controllers import (
     GRID,
@@ -155,9 +155,8 @@ def _write_traces(path: Path, results: list[EpisodeResult]) -> None:
         df.insert(0, "controller", r.row["controller"])
         df.insert(0, "terrain", r.row["terrain"])
         frames.append(df)
-    tmp = path.with_name(f".{path.name}.tmp")
-    pd.concat(frames, ignore_index=True).to_csv(tmp, index=False, float_format="%.5g", compression="gzip")
-    os.replace(tmp, path)
+    with atomic_path(path) as tmp:  # the temp name keeps .gz, but compression is given, not inferred
+        pd.concat(frames, ignore_index=True).to_csv(tmp, index=False, float_format="%.5g", compression="gzip")
 
 
 def _ranks(names: Iterable[str]) -> dict[str, int]:

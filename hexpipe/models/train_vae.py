@@ -33,6 +33,7 @@ from rich.progress import (
     TimeRemainingColumn,
 )
 
+from hexpipe.atomic import atomic_path
 from hexpipe.config import VaeConfig
 from hexpipe.models.vae import (
     DEFAULT_CHANNELS,
@@ -417,9 +418,8 @@ def _checkpoint_key(cfg: VaeConfig, data: VaeDataset) -> str:
 
 
 def _save_checkpoint(path: Path, state: dict[str, Any]) -> None:
-    tmp = path.with_name(f".{path.name}.tmp")
-    torch.save(state, tmp)
-    os.replace(tmp, path)
+    with atomic_path(path) as tmp:
+        torch.save(state, tmp)
 
 
 def _load_checkpoint(path: Path, key: str, max_epochs: int, console: Console) -> dict[str, Any] | None:
