@@ -337,9 +337,5 @@ def sweep(
         raise typer.Exit(1)
 
 
-def main() -> None:  # pragma: no cover - console entry point
-    app()
-
-
 if __name__ == "__main__":  # python -m hexpipe.cli
     app()

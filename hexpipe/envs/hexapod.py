@@ -35,8 +35,6 @@ from hexpipe.sim.robot import Robot, RobotSpec
 from hexpipe.sim.sensors import Camera, HeightMapSensor
 from hexpipe.sim.terrain import Terrain, TerrainRecipe, build_terrain, load_terrain, realize
 
-TERMINATIONS = ("goal", "stuck", "fall", "nonfinite")
-
 
 def quat_to_roll_pitch(q: np.ndarray) -> tuple[float, float]:
     x, y, z, w = q
@@ -138,7 +136,6 @@ class HexapodEnv(gym.Env):
             rnd = self.task.randomization
             friction = float(self.np_random.uniform(*rnd.friction))
             mass_scale = float(self.np_random.uniform(*rnd.mass_scale))
-        self.episode_friction, self.episode_mass_scale = friction, mass_scale
 
         phase0 = float(self.np_random.uniform(0.0, 2 * math.pi))
         self.cpg.reset(self.initial_cpg, phase0=phase0)
@@ -272,10 +269,6 @@ class HexapodEnv(gym.Env):
         }
 
     # -- extras for logging and video --------------------------------------------------------------------------
-    def obstacle_distance(self) -> float:
-        pos, quat, _, _ = self.robot.base_state()
-        return float(self.terrain.obstacle_distance(float(pos[0]), float(pos[1]), quat_to_yaw(quat)))
-
     def terrain_labels(self) -> dict[str, float]:
         """Labels for the VAE's probes, from one scan of the terrain ahead (`Terrain.rise_ahead`, 3 m): the
         `obstacle_distance` (m, inf if none within 3 m) and the next rise within the height map's far edge,

@@ -47,8 +47,3 @@ def complete_checkpoints(root: Path, at_most: int | None = None) -> list[Path]:
     found = [p for p in Path(root).glob("step-*[0-9]") if p.name[5:].isdigit() and (p / MODEL).is_file()]
     found = [p for p in found if at_most is None or checkpoint_step(p) <= at_most]
     return sorted(found, key=checkpoint_step, reverse=True)
-
-
-def latest_checkpoint(root: Path, at_most: int | None = None) -> Path | None:
-    complete = complete_checkpoints(root, at_most)
-    return complete[0] if complete else None
