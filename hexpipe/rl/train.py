@@ -299,7 +299,7 @@ def training_curve(episodes: list[dict[str, Any]], path: Path, window: int = 20)
         ax_r.plot(t[k - 1:], smooth, color="C1", label=f"mean of {k}")
         ax_s.plot(t[k - 1:], rate, color="C2")
         ax_r.legend(loc="lower right")
-    ax_r.set(xlabel="timesteps", ylabel="episode reward (100 x v_x summed)", title="Episode reward")
+    ax_r.set(xlabel="timesteps", ylabel="episode reward (sum of step rewards)", title="Episode reward")
     ax_s.set(xlabel="timesteps", ylabel=f"success rate (last {window})", ylim=(-0.02, 1.02), title="Reaches 3 m")
     fig.tight_layout()
     with atomic_path(path) as tmp:
