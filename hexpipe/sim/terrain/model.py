@@ -27,7 +27,6 @@ class TerrainError(ValueError):
     """A bad terrain file, name or definition; the message is one line naming the entry at fault."""
 
 
-
 def _floats(value: Any, n: int, what: str) -> tuple[float, ...]:
     out = tuple(float(v) for v in value)
     if len(out) != n or not all(math.isfinite(v) for v in out):
