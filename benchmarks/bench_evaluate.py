@@ -23,7 +23,7 @@ from pathlib import Path
 import pandas as pd
 
 from hexpipe.config import Params, load_params
-from hexpipe.evaluation.run import GRID_SEEDS, WORKERS, evaluate
+from hexpipe.evaluation.run import GRID_SEEDS, evaluate
 from hexpipe.models.vae import ConvVAE, encoder_config, export_encoder
 from hexpipe.rl.train import train_ppo
 
@@ -53,13 +53,14 @@ def extrapolate(rows: pd.DataFrame, default: Params) -> dict:
     counts = pd.Series({"grid": per.loc["grid", "episodes"], "fixed": 2 * terrains * episodes,
                         "policy_filmed": terrains, "policy_logged": terrains * (logged - 1),
                         "policy": terrains * (episodes - logged)}).reindex(per.index)
-    expected = float((counts * per["episode_s"]).sum()) / WORKERS
+    workers = default.eval.workers
+    expected = float((counts * per["episode_s"]).sum()) / workers
     limit_steps = default.task.time_limit * default.sim.control_hz
     learned = per.index.str.startswith("policy")
     extra = (counts * (limit_steps - per["steps"]).clip(lower=0) * per["ms_per_step"] / 1000)[learned].sum()
     return {"per_kind": {k: {c: round(float(v), 3) for c, v in r.items()} for k, r in per.iterrows()},
             "default_episodes": episodes, "expected_default_wall_s": round(expected),
-            "worst_case_default_wall_s": round(expected + float(extra) / WORKERS)}
+            "worst_case_default_wall_s": round(expected + float(extra) / workers)}
 
 
 def main() -> None:
@@ -89,8 +90,9 @@ def main() -> None:
         evaluate(params, show_progress=False)
         wall = time.perf_counter() - start
         rows = pd.read_csv(root / "report" / "results.csv")
-    report = {"episodes_per_terrain": args.episodes, "terrains": len(default.eval.terrains), "workers": WORKERS,
-              "grid_seeds": GRID_SEEDS, "measured_wall_s": round(wall, 1), **extrapolate(rows, default),
+    report = {"episodes_per_terrain": args.episodes, "terrains": len(default.eval.terrains),
+              "workers": params.eval.workers, "grid_seeds": GRID_SEEDS, "measured_wall_s": round(wall, 1),
+              **extrapolate(rows, default),
               "load_average_before": round(load_before, 2), "load_average_after": round(os.getloadavg()[0], 2)}
     print(json.dumps(report, indent=2))
     args.out.parent.mkdir(parents=True, exist_ok=True)

@@ -33,8 +33,8 @@ SetOpt = Annotated[
 def _user_errors() -> tuple[type[Exception], ...]:
     """Errors caused by bad input: shown as one line, never as a traceback (imported late: they pull in torch)."""
     from hexpipe.evaluation.video import VideoError
-    from hexpipe.models.train_vae import VaeDataError
     from hexpipe.models.vae import EncoderError
+    from hexpipe.models.vae_data import VaeDataError
     from hexpipe.models.weights import WeightsError
     from hexpipe.paths import OutputError
     from hexpipe.play import PlayError
@@ -335,10 +335,6 @@ def sweep(
                   f"{len(outcome.skipped)} kept), {len(outcome.failures)} failed; report: {out_dir / 'report.md'}")
     if outcome.failures:
         raise typer.Exit(1)
-
-
-def main() -> None:  # pragma: no cover - console entry point
-    app()
 
 
 if __name__ == "__main__":  # python -m hexpipe.cli

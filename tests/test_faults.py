@@ -273,10 +273,10 @@ def test_train_vae_reads_only_the_manifest_episodes(tmp_path):
     assert {f.episode for f in iter_frames(out)} == {Path(f).stem for f in listed}  # the copy is not read
     from rich.console import Console
 
-    from hexpipe.models.train_vae import _note_unlisted
+    from hexpipe.models.vae_data import note_unlisted
 
     console = Console(record=True, width=200)
-    _note_unlisted(out, console)
+    note_unlisted(out, console)
     text = console.export_text()
     assert "ignoring 1 .mcap file(s)" in text and stray.name in text
 

@@ -11,7 +11,9 @@ import numpy as np
 import pytest
 
 from hexpipe.config import VaeConfig
-from hexpipe.models.train_vae import _rise_labels, build_dataset, knn_r2, ridge_r2, rise_probes, train_vae
+from hexpipe.models.probes import knn_r2, ridge_r2, rise_probes
+from hexpipe.models.train_vae import train_vae
+from hexpipe.models.vae_data import _rise_labels, build_dataset
 from hexpipe.recording import Frame
 
 

@@ -19,6 +19,7 @@ from hexpipe.sim.terrain import (
     Terrain,
     TerrainError,
     block,
+    build_terrain,
     load_terrain,
     realize,
     stairs,
@@ -36,7 +37,7 @@ def client() -> Iterator[int]:
 
 def raycast(terrain: Terrain, client: int, x: np.ndarray, y: np.ndarray) -> np.ndarray:
     """Build the terrain and cast a ray straight down at every (x, y); the hit heights (m)."""
-    terrain.build(client)
+    build_terrain(terrain, client)
     starts = [(a, b, 3.0) for a, b in zip(x, y, strict=True)]
     ends = [(a, b, -1.0) for a, b in zip(x, y, strict=True)]
     hits = p.rayTestBatch(starts, ends, physicsClientId=client)
@@ -86,7 +87,7 @@ def test_height_at_matches_raycast(label: str, terrain: Terrain, client: int) ->
 
 def test_build_returns_bodies_and_sets_friction(client: int) -> None:
     terrain = jagged_terrain()
-    ids = terrain.build(client)
+    ids = build_terrain(terrain, client)
     assert len(ids) == 1 + len(terrain.boxes) + len(terrain.heightfields)  # ground first
     for body in ids:
         assert p.getDynamicsInfo(body, -1, physicsClientId=client)[1] == pytest.approx(0.7)

@@ -18,15 +18,8 @@ import torch
 
 import hexpipe.models.train_vae as stage
 from hexpipe.config import VaeConfig
-from hexpipe.models.train_vae import (
-    VaeDataError,
-    active_dims,
-    build_dataset,
-    linear_probe,
-    split_by_episode,
-    train_step,
-    train_vae,
-)
+from hexpipe.models.probes import active_dims, linear_probe
+from hexpipe.models.train_vae import train_step, train_vae
 from hexpipe.models.vae import (
     ConvVAE,
     EncoderError,
@@ -36,6 +29,7 @@ from hexpipe.models.vae import (
     preprocess,
     vae_loss,
 )
+from hexpipe.models.vae_data import VaeDataError, build_dataset, load_dataset, split_by_episode
 from hexpipe.recording import EpisodeWriter, Frame
 from hexpipe.sensors import Message
 
@@ -226,11 +220,11 @@ def test_stage_reads_mcap_rollouts(tmp_path: Path) -> None:
     """Through the real reader: inf distances survive the JSON null, and a missing sensor is named."""
     folder = tmp_path / "rollouts"
     _write_rollouts(folder, synthetic_frames(episodes=4, steps=8))
-    data = stage.load_dataset(_cfg(tmp_path))
+    data = load_dataset(_cfg(tmp_path))
     assert len(data) == 32 and len(data.episodes) == 4
     assert np.isinf(data.obstacle_distance[data.episode_index == 3]).all()  # the flat episode
     with pytest.raises(VaeDataError) as exc:
-        stage.load_dataset(_cfg(tmp_path, modality="rgb"))
+        load_dataset(_cfg(tmp_path, modality="rgb"))
     assert _one_line(exc) == f"{folder}: no 'rgb' frames (rollouts contain: heightmap)"
 
 

@@ -13,7 +13,6 @@ from hexpipe.sim.terrain import (
     SCENARIOS,
     TerrainError,
     load_terrain,
-    make_terrain,
     parse_recipe,
     realize,
     varied,
@@ -126,15 +125,20 @@ def test_a_varied_yaml_file_and_a_bad_difficulty_override(tmp_path: Path) -> Non
         realize(VARIED, np.random.default_rng(0), difficulty=1.2)
 
 
+def _fixed(name: str):
+    """A scenario without random parts, made concrete."""
+    return realize(SCENARIOS[name], np.random.default_rng(0))
+
+
 def test_rise_ahead_labels_distance_and_height_on_known_terrains() -> None:
-    single = make_terrain("single_block")  # 0.10 m high, face at 1.0 m
+    single = _fixed("single_block")  # 0.10 m high, face at 1.0 m
     assert single.rise_ahead(0.0, 0.0, 0.0, max_range=1.4) == pytest.approx((1.0, 0.1), abs=2e-3)
     assert single.rise_ahead(0.0, 0.0, 0.0, max_range=0.9) == (math.inf, pytest.approx(math.nan, nan_ok=True))
     assert single.rise_ahead(0.6, 0.2, 0.0, max_range=1.4) == pytest.approx((0.4, 0.1), abs=2e-3)
-    stairs = make_terrain("stairs")  # risers of 0.05 m every 0.35 m from x = 1.0
+    stairs = _fixed("stairs")  # risers of 0.05 m every 0.35 m from x = 1.0
     assert stairs.rise_ahead(0.0, 0.0, 0.0, max_range=1.4) == pytest.approx((1.0, 0.05), abs=2e-3)
     assert stairs.rise_ahead(1.1, 0.0, 0.0, max_range=1.4) == pytest.approx((0.25, 0.05), abs=2e-3)  # one riser
-    extra = make_terrain("extra_blocks")
+    extra = _fixed("extra_blocks")
     distance, height = extra.rise_ahead(1.1, 0.0, 0.0, max_range=1.4)  # on top of the first block
     assert math.isinf(distance) and math.isnan(height)  # the second block is no higher: no rise
     text = "boxes: [{face: 0.8, depth: 0.3, height: 0.05}, {face: 1.5, depth: 0.3, height: 0.12}]"

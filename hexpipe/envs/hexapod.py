@@ -37,9 +37,7 @@ from hexpipe.sensors.heightmap import HEADING_FRAME, quat_to_yaw
 from hexpipe.sim.cpg import CPG
 from hexpipe.sim.gait import GaitMap, slew_path
 from hexpipe.sim.robot import Robot, RobotSpec, robot_shapes
-from hexpipe.sim.terrain import Terrain, TerrainRecipe, load_terrain, realize
-
-TERMINATIONS = ("goal", "stuck", "fall", "nonfinite")
+from hexpipe.sim.terrain import Terrain, TerrainRecipe, build_terrain, load_terrain, realize
 
 
 def quat_to_roll_pitch(q: np.ndarray) -> tuple[float, float]:
@@ -147,7 +145,7 @@ class HexapodEnv(gym.Env):
         )
         # options={"difficulty": d} (a curriculum's level, in [0, 1]) overrides a `varied` terrain's own difficulty
         self.terrain = realize(self.recipe, self.np_random, (options or {}).get("difficulty"))
-        self.terrain_bodies = self.terrain.build(c)
+        self.terrain_bodies = build_terrain(self.terrain, c)
 
         friction = self.terrain.friction or self.sim_cfg.friction
         mass_scale = 1.0
@@ -155,7 +153,6 @@ class HexapodEnv(gym.Env):
             rnd = self.task.randomization
             friction = float(self.np_random.uniform(*rnd.friction))
             mass_scale = float(self.np_random.uniform(*rnd.mass_scale))
-        self.episode_friction, self.episode_mass_scale = friction, mass_scale
 
         phase0 = float(self.np_random.uniform(0.0, 2 * math.pi))
         self.cpg.reset(self.initial_cpg, phase0=phase0)
@@ -324,10 +321,6 @@ class HexapodEnv(gym.Env):
         )
 
     # -- extras for logging and video --------------------------------------------------------------------------
-    def obstacle_distance(self) -> float:
-        pos, quat, _, _ = self.robot.base_state()
-        return float(self.terrain.obstacle_distance(float(pos[0]), float(pos[1]), quat_to_yaw(quat)))
-
     def terrain_labels(self) -> dict[str, float]:
         """Labels for the VAE's probes, from one scan of the terrain ahead (`Terrain.rise_ahead`, 3 m): the
         `obstacle_distance` (m, inf if none within 3 m) and the next rise within the height map's far edge,

@@ -1,8 +1,9 @@
 """The evaluate stage: every controller on every terrain of the suite, on the same seeded episodes.
 
-Order of work: validate everything that can be wrong (terrains, grid, policies) before any episode runs; run the
-fixed-gait grid on the training terrains and, in the same worker pool, the learned and open-loop controllers on
-the suite; once the grid is done, pick `best_fixed` and run it on the suite too. Episode i of every (terrain,
+Order of work, as data (`Plan`): validate everything that can be wrong (terrains, grid, policies) before any
+episode runs; run the fixed-gait grid on the training terrains and, in the same worker pool, the learned and
+open-loop controllers on the suite; once the grid is done, pick `best_fixed` (`Choice`) and run it on the suite
+too (`run_plan`). Episode i of every (terrain,
 controller) uses seed eval.seed + i; the grid uses the next GRID_SEEDS seeds, so the baseline is not chosen on
 the very episodes it is then scored on. Outputs go to eval.out_dir (MCAP logs, videos, CPG traces) and
 eval.report_dir (metrics.json, results.csv, grid.csv, report.md, figures), every file via a temporary name.
@@ -12,17 +13,18 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import shlex
 import sys
 import time
 from collections.abc import Callable, Iterable
 from concurrent.futures import FIRST_COMPLETED, Future, wait
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import pandas as pd
 
+from hexpipe.atomic import atomic_path
 from hexpipe.config import Params
 from hexpipe.evaluation.controllers import (
     GRID,
@@ -46,6 +48,76 @@ TRACES = "cpg_traces.csv.gz"
 _READS = ("sim", "cpg", "sensors", "task", "eval", "ppo.train_terrains", "collect.log_every")
 
 
+@dataclass(frozen=True)
+class Plan:
+    """What evaluate runs, validated before any episode: the suite, the training terrains and gaits of the grid, and
+    the controllers with their descriptions. Two phases: `first_jobs` (the grid and every controller but best_fixed,
+    all at once), then, once the grid is done, `best_fixed_jobs` of the gait it chose."""
+
+    suite: list[Scenario]
+    train: list[Scenario]
+    gaits: list[Gait]
+    learned: list[ControllerSpec]
+    described: dict[str, str]  # controller -> what it is
+    notes: list[str]
+    extra_terrains: tuple[str, ...]
+
+    def first_jobs(self, params: Params) -> list[EpisodeJob]:
+        """The grid on the training terrains, the learned and open-loop controllers on the suite; slow filmed or
+        logged episodes first."""
+        jobs = _grid_jobs(params, self.train, self.gaits)
+        for spec in [*self.learned, ControllerSpec("open_loop", gait=params.cpg.initial)]:
+            jobs += _suite_jobs(params, self.suite, spec)
+        jobs.sort(key=lambda j: (j.video is None, j.mcap is None))
+        return jobs
+
+    def best_fixed_jobs(self, params: Params, choice: Choice) -> list[EpisodeJob]:
+        return _suite_jobs(params, self.suite, ControllerSpec("best_fixed", gait=choice.gait))
+
+    def episodes(self, params: Params) -> int:
+        """Every episode of both phases (for the progress bar)."""
+        grid = len(self.gaits) * len(self.train) * GRID_SEEDS
+        return grid + (len(self.learned) + 2) * len(self.suite) * params.eval.episodes  # + open_loop, best_fixed
+
+
+@dataclass(frozen=True)
+class Choice:
+    """The best fixed gait and the grid's ranking it came from (best first)."""
+
+    gait: Gait
+    ranking: pd.DataFrame
+
+
+@dataclass(frozen=True)
+class Outcome:
+    results: list[EpisodeResult]  # both phases, in completion order
+    choice: Choice
+    wall: float  # s
+
+    @property
+    def evaluated(self) -> list[EpisodeResult]:
+        """The suite's episodes (the grid's left out)."""
+        return [r for r in self.results if r.job.controller.name != GRID]
+
+    @property
+    def written(self) -> set[Path]:
+        """The MCAP logs and videos this run wrote."""
+        return {p for r in self.evaluated for p in (r.job.mcap, r.job.video) if p is not None}
+
+    @property
+    def controllers(self) -> list[str]:
+        return [c for c in ORDER if any(r.job.controller.name == c for r in self.results)]
+
+
+def plan(params: Params, extra_terrains: tuple[str, ...]) -> Plan:
+    """Everything that can be wrong, checked before any episode runs: TerrainError, ConfigError, PolicyError."""
+    suite = evaluation_suite(params, extra_terrains)
+    train = training_suite(params)
+    gaits = grid_gaits(params)
+    learned, described, notes = learned_controllers(params)
+    return Plan(suite, train, gaits, learned, described, notes, extra_terrains)
+
+
 def _suite_jobs(params: Params, suite: list[Scenario], spec: ControllerSpec) -> list[EpisodeJob]:
     """eval.episodes jobs per terrain; the policy's first episodes are logged to MCAP and its first one filmed."""
     cfg, out = params.eval, Path(params.eval.out_dir)
@@ -65,12 +137,19 @@ def _grid_jobs(params: Params, train: list[Scenario], gaits: list[Gait]) -> list
             for i in range(GRID_SEEDS)]
 
 
-def _run_pool(
-    params: Params, jobs: list[EpisodeJob], best_fixed_jobs: Callable[[list[EpisodeResult]], list[EpisodeJob]],
-    progress: Callable[[], None],
-) -> list[EpisodeResult]:
-    """Run `jobs` in the worker pool; when the last grid job finishes, also run `best_fixed_jobs(grid results)`."""
+def choose_best_fixed(grid: list[EpisodeResult], goal_distance: float) -> Choice:
+    ranked = rank_gaits(pd.DataFrame([r.row for r in grid]), goal_distance)
+    gaits = {gait_label(r.job.controller.gait): r.job.controller.gait for r in grid}
+    return Choice(gaits[ranked.iloc[0]["gait"]], ranked)
+
+
+def run_plan(params: Params, work: Plan, progress: Callable[[], None]) -> Outcome:
+    """Run both phases in one worker pool: the first phase's jobs at once, best_fixed's as soon as the last grid
+    episode is in (while the rest of the first phase still runs)."""
+    started = time.perf_counter()
+    jobs = work.first_jobs(params)
     results: list[EpisodeResult] = []
+    choice: Choice | None = None
     grid_left = sum(j.controller.name == GRID for j in jobs)
     with worker_pool(params.eval.workers, ignore_sigint=False) as pool:  # workers die with a killed evaluate
         pending: dict[Future, EpisodeJob] = {pool.submit(run_episode, params, j): j for j in jobs}
@@ -83,20 +162,17 @@ def _run_pool(
                     progress()
                     if job.controller.name == GRID:
                         grid_left -= 1
-                        if grid_left == 0:
+                        if grid_left == 0:  # phase 2
                             grid = [r for r in results if r.job.controller.name == GRID]
-                            pending |= {pool.submit(run_episode, params, j): j for j in best_fixed_jobs(grid)}
+                            choice = choose_best_fixed(grid, params.task.goal_distance)
+                            more = work.best_fixed_jobs(params, choice)
+                            pending |= {pool.submit(run_episode, params, j): j for j in more}
         except BaseException:
             for future in pending:
                 future.cancel()
             raise
-    return results
-
-
-def _best_gait(grid: list[EpisodeResult], goal_distance: float) -> tuple[Gait, pd.DataFrame]:
-    ranked = rank_gaits(pd.DataFrame([r.row for r in grid]), goal_distance)
-    gaits = {gait_label(r.job.controller.gait): r.job.controller.gait for r in grid}
-    return gaits[ranked.iloc[0]["gait"]], ranked
+    assert choice is not None  # the grid has at least one gait and one training terrain
+    return Outcome(results, choice, time.perf_counter() - started)
 
 
 def _same(a: Any, b: Any) -> bool:
@@ -155,9 +231,8 @@ def _write_traces(path: Path, results: list[EpisodeResult]) -> None:
         df.insert(0, "controller", r.row["controller"])
         df.insert(0, "terrain", r.row["terrain"])
         frames.append(df)
-    tmp = path.with_name(f".{path.name}.tmp")
-    pd.concat(frames, ignore_index=True).to_csv(tmp, index=False, float_format="%.5g", compression="gzip")
-    os.replace(tmp, path)
+    with atomic_path(path) as tmp:  # the temp name keeps .gz, but compression is given, not inferred
+        pd.concat(frames, ignore_index=True).to_csv(tmp, index=False, float_format="%.5g", compression="gzip")
 
 
 def _ranks(names: Iterable[str]) -> dict[str, int]:
@@ -176,71 +251,48 @@ def _progress_bar(total: int, show: bool) -> tuple[Any, Callable[[], None]]:
 
 def evaluate(params: Params, extra_terrains: Iterable[str] = (), show_progress: bool = True) -> str:
     """Run the suite, write the reports, and return a short printable summary."""
-    cfg = params.eval
-    extra_terrains = tuple(extra_terrains)
-    suite = evaluation_suite(params, extra_terrains)  # TerrainError, before anything runs
-    train = training_suite(params)
-    gaits = grid_gaits(params)  # ConfigError
-    learned, described, notes = learned_controllers(params)  # PolicyError
-    out_dir, report_dir = Path(cfg.out_dir), Path(cfg.report_dir)
+    work = plan(params, tuple(extra_terrains))
+    out_dir, report_dir = Path(params.eval.out_dir), Path(params.eval.report_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
 
-    jobs = _grid_jobs(params, train, gaits)
-    for spec in [*learned, ControllerSpec("open_loop", gait=params.cpg.initial)]:
-        jobs += _suite_jobs(params, suite, spec)
-    jobs.sort(key=lambda j: (j.video is None, j.mcap is None))  # the slow filmed/logged episodes first
-    chosen: dict[str, Any] = {}
-
-    def best_fixed_jobs(grid: list[EpisodeResult]) -> list[EpisodeJob]:
-        chosen["gait"], chosen["grid"] = _best_gait(grid, params.task.goal_distance)
-        return _suite_jobs(params, suite, ControllerSpec("best_fixed", gait=chosen["gait"]))
-
-    started = time.perf_counter()
-    bar, advance = _progress_bar(len(jobs) + len(suite) * cfg.episodes, show_progress)
+    bar, advance = _progress_bar(work.episodes(params), show_progress)
     with bar:
-        results = _run_pool(params, jobs, best_fixed_jobs, advance)
-    wall = time.perf_counter() - started
+        outcome = run_plan(params, work, advance)
 
-    controllers = [c for c in ORDER if any(r.job.controller.name == c for r in results)]
-    terrains = [s.stem for s in suite]
-    order = {"terrain": _ranks([*terrains, *(s.stem for s in train)]), "controller": _ranks([*ORDER, GRID])}
-    rows = pd.DataFrame([r.row for r in results]).sort_values(
+    terrains = [s.stem for s in work.suite]
+    order = {"terrain": _ranks([*terrains, *(s.stem for s in work.train)]), "controller": _ranks([*ORDER, GRID])}
+    rows = pd.DataFrame([r.row for r in outcome.results]).sort_values(
         ["terrain", "controller", "episode"], key=lambda col: col.map(order[col.name]) if col.name in order else col
     )
-    table = summarise(rows, terrains, controllers)
-    evaluated = [r for r in results if r.job.controller.name != GRID]
-    written = {p for r in evaluated for p in (r.job.mcap, r.job.video) if p is not None}
-    _remove_stale(out_dir, suite, written)
-    _write_traces(out_dir / TRACES, evaluated)
+    table = summarise(rows, terrains, outcome.controllers)
+    _remove_stale(out_dir, work.suite, outcome.written)
+    _write_traces(out_dir / TRACES, outcome.evaluated)
 
-    inputs = _report_inputs(params, extra_terrains, terrains, controllers, described, notes, chosen, evaluated,
-                            written, wall, len(gaits) * len(train))
+    inputs = _report_inputs(params, work, outcome)
     write_reports(report_dir, rows, table, inputs)
-    return _summary(table, terrains, controllers, inputs.best_gait, wall, report_dir)
+    return _summary(table, terrains, outcome.controllers, inputs.best_gait, outcome.wall, report_dir)
 
 
-def _report_inputs(
-    params: Params, extra_terrains: tuple[str, ...], terrains: list[str], controllers: list[str],
-    described: dict[str, str], notes: list[str], chosen: dict[str, Any], evaluated: list[EpisodeResult],
-    written: set[Path], wall: float, grid_cells: int,
-) -> ReportInputs:
+def _report_inputs(params: Params, work: Plan, outcome: Outcome) -> ReportInputs:
     cfg, out_dir = params.eval, Path(params.eval.out_dir)
-    first = {r.row["terrain"]: r for r in evaluated if r.job.controller.name == "policy" and r.job.index == 0}
+    terrains, written, gait = [s.stem for s in work.suite], outcome.written, outcome.choice.gait
+    first = {r.row["terrain"]: r for r in outcome.evaluated if r.job.controller.name == "policy" and r.job.index == 0}
     return ReportInputs(
-        command=command_line(params, extra_terrains), terrains=terrains, controllers=controllers,
-        described={**described, "best_fixed": f"fixed gait {gait_label(chosen['gait'])} (zero action)",
+        command=command_line(params, work.extra_terrains), terrains=terrains, controllers=outcome.controllers,
+        described={**work.described, "best_fixed": f"fixed gait {gait_label(gait)} (zero action)",
                    "open_loop": f"fixed gait {gait_label(params.cpg.initial)} = cpg.initial (zero action)"},
         params_summary={
             "episodes per terrain and controller": cfg.episodes, "seeds": f"{cfg.seed}..{cfg.seed + cfg.episodes - 1}",
             "goal": f"{params.task.goal_distance} m", "time limit": f"{params.task.time_limit} s",
-            "best_fixed search": f"{grid_cells} (gait, training terrain) pairs x {GRID_SEEDS} seeds",
-            "wall time": f"{wall:.0f} s with {cfg.workers} workers",
+            "best_fixed search": f"{len(work.gaits) * len(work.train)} (gait, training terrain) pairs x "
+                                 f"{GRID_SEEDS} seeds",
+            "wall time": f"{outcome.wall:.0f} s with {cfg.workers} workers",
         },
-        grid=chosen["grid"], best_gait=gait_label(chosen["gait"]), first_policy_episodes=first,
+        grid=outcome.choice.ranking, best_gait=gait_label(gait), first_policy_episodes=first,
         cpg_initial=params.cpg.initial, goal_distance=params.task.goal_distance,
         traces=str(out_dir / TRACES), videos={s: str(p) for s in terrains if (p := out_dir / f"{s}.mp4") in written},
         mcaps={s: sorted(str(p) for p in written if p.suffix == ".mcap" and p.parent.name == s) for s in terrains},
-        notes=notes,
+        notes=work.notes,
     )
 
 

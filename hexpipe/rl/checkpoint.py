@@ -1,7 +1,8 @@
 """Saving and loading a policy with its observation normalisation, atomically.
 
 A checkpoint is a folder `step-<timesteps>/` holding `model.zip` and `vecnormalize.pkl`; it is written under a
-temporary name and renamed when complete, so an interrupted save never leaves a half checkpoint behind.
+temporary name and renamed when complete (`atomic.atomic_dir`), so an interrupted save never leaves a half
+checkpoint behind.
 """
 
 from __future__ import annotations
@@ -11,26 +12,19 @@ from pathlib import Path
 
 from stable_baselines3.common.base_class import BaseAlgorithm
 
+from hexpipe.atomic import atomic_dir
+
 MODEL = "model.zip"
 NORMALISATION = "vecnormalize.pkl"
 
 
 def save_policy(model: BaseAlgorithm, directory: Path) -> None:
     """Write model.zip and vecnormalize.pkl into `directory` (replaced as a whole)."""
-    directory = Path(directory)
-    directory.parent.mkdir(parents=True, exist_ok=True)
-    tmp = directory.with_name(directory.name + ".tmp")
-    shutil.rmtree(tmp, ignore_errors=True)
-    tmp.mkdir()
-    model.save(tmp / MODEL)
-    normaliser = model.get_vec_normalize_env()
-    if normaliser is not None:
-        normaliser.save(str(tmp / NORMALISATION))
-    old = directory.with_name(directory.name + ".old")
-    if directory.exists():
-        directory.rename(old)
-    tmp.rename(directory)
-    shutil.rmtree(old, ignore_errors=True)
+    with atomic_dir(directory) as tmp:
+        model.save(tmp / MODEL)
+        normaliser = model.get_vec_normalize_env()
+        if normaliser is not None:
+            normaliser.save(str(tmp / NORMALISATION))
 
 
 def save_checkpoint(model: BaseAlgorithm, root: Path, keep: int = 2) -> Path:
@@ -53,8 +47,3 @@ def complete_checkpoints(root: Path, at_most: int | None = None) -> list[Path]:
     found = [p for p in Path(root).glob("step-*[0-9]") if p.name[5:].isdigit() and (p / MODEL).is_file()]
     found = [p for p in found if at_most is None or checkpoint_step(p) <= at_most]
     return sorted(found, key=checkpoint_step, reverse=True)
-
-
-def latest_checkpoint(root: Path, at_most: int | None = None) -> Path | None:
-    complete = complete_checkpoints(root, at_most)
-    return complete[0] if complete else None

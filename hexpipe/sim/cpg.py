@@ -27,8 +27,6 @@ import numpy as np
 
 from hexpipe.config import CpgConfig
 
-N_LEGS = 6
-
 
 def tripod_phases(tripods: np.ndarray) -> np.ndarray:
     """Desired phase (rad) of each leg: 0 for tripod 0, pi for tripod 1."""

@@ -20,6 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
+from hexpipe.atomic import atomic_path
+
 
 @dataclass(frozen=True)
 class LegMount:
@@ -195,9 +197,8 @@ def urdf_path(spec: RobotSpec) -> Path:
     digest = hashlib.sha1(text.encode()).hexdigest()[:12]
     path = Path(tempfile.gettempdir()) / f"hexpipe_daisy_{digest}.urdf"
     if not path.exists():
-        tmp = path.with_suffix(f".{id(text)}.tmp")
-        tmp.write_text(text)
-        tmp.replace(path)
+        with atomic_path(path, shared=True) as tmp:  # other processes may be writing the same file
+            tmp.write_text(text)
     return path
 
 
