@@ -60,6 +60,12 @@ def read_yaml(path: Path, error: type[Exception], source: str | None = None) -> 
     return parse_yaml(text, source, error)
 
 
+def one_line(exc: BaseException) -> str:
+    """An exception as one line, type first, for messages that wrap a library's error."""
+    text = " ".join(str(exc).split())
+    return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
+
+
 def show(value: Any) -> str:
     """A user-facing rendering of a value: tuples as YAML-like lists."""
     if isinstance(value, bool):

@@ -26,6 +26,7 @@ from mcap.stream_reader import StreamReader
 
 from hexpipe import sensors as registry
 from hexpipe.recording.writer import TOPIC_STEP
+from hexpipe.validation import one_line
 
 _MAGIC = b"\x89MCAP0\r\n"
 _FOOTER = struct.Struct("<BQQQI")  # opcode, record length, summary_start, summary_offset_start, summary_crc
@@ -131,7 +132,7 @@ def _iter_file(path: Path, modalities: frozenset[str]) -> Iterator[Frame]:
             readings = {sensor.name: sensor.decode(_DECODERS[sensor.kind](pending[topic]))
                         for topic, sensor in by_topic.items() if topic in pending}
         except (ValueError, IndexError, KeyError, TypeError, struct.error) as exc:
-            raise RecordingError(f"{path}: bad message at log time {pending_time} ({_one_line(exc)})") from None
+            raise RecordingError(f"{path}: bad message at log time {pending_time} ({one_line(exc)})") from None
         if terrain is not None:
             meta.setdefault("terrain", terrain)
         return Frame(episode=path.stem, step=index, sensors=readings, meta=meta)
@@ -170,7 +171,7 @@ def _records(path: Path, stream: IO[bytes]) -> Iterator[Any]:
         except StopIteration:
             return
         except Exception as exc:  # the parser raises a zoo: McapError, CRC, struct, zstd, unicode, ...
-            raise RecordingError(f"{path}: truncated or corrupt MCAP ({_one_line(exc)})") from None
+            raise RecordingError(f"{path}: truncated or corrupt MCAP ({one_line(exc)})") from None
         yield record
 
 
@@ -179,12 +180,8 @@ def _guard(path: Path, read: Callable[[], T]) -> T:
     try:
         return read()
     except Exception as exc:
-        raise RecordingError(f"{path}: truncated or corrupt MCAP ({_one_line(exc)})") from None
+        raise RecordingError(f"{path}: truncated or corrupt MCAP ({one_line(exc)})") from None
 
-
-def _one_line(exc: BaseException) -> str:
-    text = " ".join(str(exc).split())
-    return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
 
 
 class _Bounded:

@@ -25,6 +25,7 @@ from hexpipe.config import CpgConfig, Params, SensorConfig, SimConfig
 from hexpipe.rl.features import PROPRIOCEPTIVE_KEYS, Encoder
 from hexpipe.rl.inference import WEIGHTS, WEIGHTS_CONFIG, ObservationNormaliser, load_weights
 from hexpipe.rl.train import POLICY_CONFIG
+from hexpipe.validation import one_line
 
 POLICY_SUBDIR = "policy"  # train.py saves the policy files here
 _RETRAIN = "run `hexpipe train-ppo`"
@@ -164,7 +165,7 @@ def _read_config(path: Path) -> dict[str, Any]:
     try:
         config = json.loads(path.read_text())
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise PolicyError(f"{path}: unreadable policy config ({_one_line(exc)}); {_RETRAIN}") from None
+        raise PolicyError(f"{path}: unreadable policy config ({one_line(exc)}); {_RETRAIN}") from None
     required = ("observation_dim", "blind", "modality", "latent_dim", "encoder_dir", "sensors")
     missing = [k for k in required if k not in config] if isinstance(config, dict) else list(required)
     if missing:
@@ -226,7 +227,3 @@ def _drift(config: dict[str, Any], params: Params) -> list[str]:
         out.append(f"ppo.train_terrains: {trained_on} -> {list(params.ppo.train_terrains)}")
     return out
 
-
-def _one_line(exc: BaseException) -> str:
-    text = " ".join(str(exc).split())
-    return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
