@@ -10,32 +10,16 @@ params.yaml, e.g. `--sim physics_hz=240 --sim solver_iterations=50 --sim positio
 from __future__ import annotations
 
 import argparse
-import math
 from pathlib import Path
 
-import numpy as np
+from fixed_gait import fixed_gait_episode
 
 from hexpipe.atomic import write_json
-from hexpipe.config import SimConfig, TaskConfig
-from hexpipe.envs.hexapod import HexapodEnv
-from hexpipe.envs.rewards import cost_of_transport
+from hexpipe.config import SimConfig
 
 # (terrain, a, b) at omega = 1.5 pi: the default stride, then the long stride the policies choose
 CASES = [("flat", 0.25, 0.15), ("flat", 0.25, 0.40), ("single_block", 0.25, 0.15), ("single_block", 0.25, 0.30),
          ("single_block", 0.25, 0.40), ("flat", 0.40, 0.15), ("flat", 0.40, 0.50)]
-
-
-def episode(terrain: str, a: float, b: float, seed: int, sim: SimConfig) -> dict:
-    env = HexapodEnv(terrain, sim=sim, initial_cpg=(a, b, 1.5 * math.pi), task=TaskConfig(sensors=()))
-    env.reset(seed=seed)
-    while True:
-        _, _, terminated, truncated, info = env.step(np.zeros(3))
-        if terminated or truncated:
-            env.close()
-            cot = cost_of_transport(info["energy"], env.robot_spec.total_mass, info["distance"])
-            return {"terrain": terrain, "a": a, "b": b, "seed": seed, "termination": info["termination"],
-                    "distance_m": round(info["distance"], 3), "time_s": round(info["time"], 2),
-                    "cost_of_transport": round(cot, 2)}
 
 
 def main() -> None:
@@ -46,7 +30,7 @@ def main() -> None:
     args = parser.parse_args()
     sim = SimConfig(**dict(kv.split("=", 1) for kv in args.sim))
     print(sim)
-    rows = [episode(t, a, b, s, sim) for t, a, b in CASES for s in range(args.seeds)]
+    rows = [fixed_gait_episode(t, a, b, s, sim) for t, a, b in CASES for s in range(args.seeds)]
     for r in rows:
         print(f"{r['terrain']:13s} a={r['a']:.2f} b={r['b']:.2f} seed={r['seed']}: {r['termination']} "
               f"after {r['distance_m']:.2f} m in {r['time_s']:.1f} s, cost of transport {r['cost_of_transport']:.2f}")

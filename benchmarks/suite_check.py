@@ -12,32 +12,15 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 from pathlib import Path
 
-import numpy as np
+from fixed_gait import fixed_gait_episode
 
-from hexpipe.config import TaskConfig
-from hexpipe.envs.hexapod import HexapodEnv
-from hexpipe.envs.rewards import cost_of_transport
-from hexpipe.sim.terrain import TerrainRecipe, load_terrain, parse_recipe
+from hexpipe.sim.terrain import load_terrain, parse_recipe
 
 TERRAINS = ["flat", "low_block", "single_block", "tall_block", "steps_up", "block_near", "block_far"]
 # (a, b) at omega = 1.5 pi: the default low gait (cpg.initial), a medium lift, b = 0.4, and the grid's best fixed gait
 GAITS = [(0.25, 0.15), (0.4, 0.25), (0.4, 0.4), (0.4, 0.5)]
-
-
-def episode(terrain: TerrainRecipe, a: float, b: float, seed: int) -> dict:
-    env = HexapodEnv(terrain, initial_cpg=(a, b, 1.5 * math.pi), task=TaskConfig(sensors=()))
-    env.reset(seed=seed)
-    while True:
-        _, _, terminated, truncated, info = env.step(np.zeros(3))
-        if terminated or truncated:
-            env.close()
-            cot = cost_of_transport(info["energy"], env.robot_spec.total_mass, info["distance"])
-            return {"terrain": terrain.name, "a": a, "b": b, "seed": seed, "termination": info["termination"],
-                    "distance_m": round(info["distance"], 3), "time_s": round(info["time"], 2),
-                    "cost_of_transport": round(cot, 2)}
 
 
 def main() -> None:
@@ -53,7 +36,7 @@ def main() -> None:
     rows = []
     for terrain in terrains:
         for a, b in GAITS:
-            runs = [episode(terrain, a, b, s) for s in range(args.seeds)]
+            runs = [fixed_gait_episode(terrain, a, b, s) for s in range(args.seeds)]
             rows += runs
             goals = [r for r in runs if r["termination"] == "goal"]
             where = ", ".join(f"{r['termination']} {r['distance_m']:.2f} m" for r in runs if r not in goals)
