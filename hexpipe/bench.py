@@ -120,15 +120,17 @@ def bench_training(params: Params, steps: int = 3072, terrain: str | None = None
     """PPO training steps/s with `ppo.n_envs` worker envs against the bare vectorised env rate in the same run.
 
     The policy sees what `train-ppo` gives it (an encoder of the configured VAE shape, untrained: its weights do
-    not change its cost). `bare_env_steps_per_s` is timed inside the run (rl.train.EnvClock), so both numbers
-    share the machine's load. Budget: `steps` timesteps, a few PPO rollouts and updates.
+    not change its cost), embedded in the env workers as in training. `bare_env_steps_per_s` is timed inside the run
+    (rl.train.EnvClock: physics, sensor and encoder, the observation the policy consumes), so both numbers share
+    the machine's load. Budget: `steps` timesteps, a few PPO rollouts and updates.
     """
     import torch
     from stable_baselines3 import PPO
     from stable_baselines3.common.vec_env import VecNormalize
 
     from hexpipe.models.vae import ConvVAE, FrozenEncoder, channels_for, encoder_config
-    from hexpipe.rl.train import EnvClock, make_vec_env, wrap_features
+    from hexpipe.rl.features import TerrainFeatures
+    from hexpipe.rl.train import EnvClock, make_vec_env
 
     cfg, vae = params.ppo, params.vae
     torch.set_num_threads(1)
@@ -137,10 +139,9 @@ def bench_training(params: Params, steps: int = 3072, terrain: str | None = None
         shape = registry.get(vae.modality).frame_shape(params.sensors)
         model = ConvVAE(channels_for(vae.modality), vae.image_size, vae.latent_dim)
         encoder = FrozenEncoder(model.encoder, encoder_config(model, vae.modality, shape))
-    sensors = () if encoder is None else (encoder.modality,)
     terrains = (terrain,) if terrain else cfg.train_terrains
-    clock = EnvClock(make_vec_env(params, terrains, cfg.n_envs, sensors, cfg.randomize, cfg.seed))
-    venv = VecNormalize(wrap_features(clock, encoder, params), norm_obs=True, norm_reward=True, gamma=cfg.gamma)
+    clock = EnvClock(make_vec_env(params, terrains, cfg.n_envs, encoder, cfg.randomize, cfg.seed))
+    venv = VecNormalize(TerrainFeatures(clock), norm_obs=True, norm_reward=True, gamma=cfg.gamma)
     agent = PPO(
         "MlpPolicy", venv, n_steps=cfg.n_steps, batch_size=cfg.batch_size, n_epochs=cfg.n_epochs,
         learning_rate=cfg.learning_rate, gamma=cfg.gamma, gae_lambda=cfg.gae_lambda, clip_range=cfg.clip_range,

@@ -17,7 +17,7 @@ from hexpipe.evaluation.run import GRID_SEEDS, evaluate
 from hexpipe.evaluation.video import count_frames
 from hexpipe.models.vae import ConvVAE, encoder_config, export_encoder
 from hexpipe.recording.reader import count_messages, read_metadata
-from hexpipe.rl.features import TerrainFeatures
+from hexpipe.rl.features import TerrainEmbedding, TerrainFeatures
 from hexpipe.rl.policy import PolicyError, load_policy
 from hexpipe.rl.train import train_ppo
 from hexpipe.sim.terrain import TerrainError
@@ -146,9 +146,10 @@ def test_policy_features_match_training_layout(seeing):
     assert policy.sensors == ("heightmap",) and policy.name == "ppo+heightmap-vae8"
     env = HexapodEnv("single_block", sim=seeing.sim, cpg=seeing.cpg, sensors=seeing.sensors, task=seeing.task)
     obs, _ = env.reset(seed=3)
-    wrapped = TerrainFeatures(DummyVecEnv([lambda: env]), policy.encoder, frame_shape=(32, 32))
-    batch = {k: v[None] for k, v in obs.items()}
-    np.testing.assert_array_equal(policy.features(obs), wrapped.features(batch))
+    embedded = TerrainEmbedding(env, policy.encoder, frame_shape=(32, 32))  # as train-ppo's workers see it
+    wrapped = TerrainFeatures(DummyVecEnv([lambda: embedded]), expect_embedding=True)
+    batch = {k: v[None] for k, v in embedded.observation(obs).items()}
+    np.testing.assert_allclose(policy.features(obs), wrapped.features(batch), rtol=0, atol=1e-6)
     action = policy.predict(obs)
     assert action.shape == (3,) and np.all(np.abs(action) <= 1) and np.array_equal(action, policy.predict(obs))
     env.close()

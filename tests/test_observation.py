@@ -83,7 +83,7 @@ def test_policy_features_follow_the_setting() -> None:
     for observe_position in (True, False):
         task = TaskConfig(observe_position=observe_position, sensors=())
         venv = DummyVecEnv([lambda task=task: HexapodEnv("flat", task=task)])
-        wrapped = TerrainFeatures(venv, encoder=None)
+        wrapped = TerrainFeatures(venv, expect_embedding=False)
         dims[observe_position] = wrapped.observation_space.shape[0]
         assert wrapped.reset().shape == (1, dims[observe_position])
         wrapped.close()

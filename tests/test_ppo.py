@@ -10,7 +10,7 @@ from stable_baselines3.common.vec_env import DummyVecEnv
 from hexpipe.config import Params, load_params
 from hexpipe.envs.hexapod import HexapodEnv
 from hexpipe.models.vae import ConvVAE, encoder_config, export_encoder
-from hexpipe.rl.features import TerrainFeatures
+from hexpipe.rl.features import TerrainEmbedding, TerrainFeatures
 from hexpipe.rl.train import EnvClock, first_time_success_rate, train_ppo
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -27,25 +27,31 @@ class CountingEncoder:
         return np.full((len(batch), 8), batch.mean(axis=(1, 2))[:, None], dtype=np.float32)
 
 
-def test_features_encode_once_per_step_batched_and_handle_terminal_observations():
-    fns = [lambda: HexapodEnv("single_block", task=Params().task.model_copy(update={"time_limit": 0.2}))] * 2
+def test_each_env_embeds_its_own_frames_and_terminal_observations_keep_the_layout():
     encoder = CountingEncoder()
-    venv = TerrainFeatures(DummyVecEnv(fns), encoder, frame_shape=(32, 32))
+    task = Params().task.model_copy(update={"time_limit": 0.2})
+    fns = [lambda: TerrainEmbedding(HexapodEnv("single_block", task=task), encoder, frame_shape=(32, 32))] * 2
+    venv = TerrainFeatures(DummyVecEnv(fns), expect_embedding=True)
     obs = venv.reset()
     assert obs.shape == (2, 13 + 6 + 8) and venv.observation_space.shape == (27,)
     for _ in range(4):  # 0.2 s = 4 steps: every env truncates on the 4th
         obs, _, dones, infos = venv.step(np.zeros((2, 3), dtype=np.float32))
     assert dones.all()
     assert all(info["terminal_observation"].shape == (27,) for info in infos)
-    # one batched call per reset/step, plus one for the batch of terminal observations
-    assert encoder.calls == [(2, 32, 32)] * 5 + [(2, 32, 32)]
+    # the embedding is the encoder's output on the frame (CountingEncoder: the frame's mean in every latent dim)
+    assert np.all(obs[:, 19:] == obs[:, 19:20])
+    # one single-frame call per env per reset and step, plus the auto-reset after the last step
+    assert encoder.calls == [(1, 32, 32)] * (2 * (1 + 4 + 1))
     venv.close()
 
 
 def test_features_refuse_an_encoder_for_an_unobserved_sensor():
-    fns = [lambda: HexapodEnv("flat", task=Params().task.model_copy(update={"sensors": ()}))]
+    env = HexapodEnv("flat", task=Params().task.model_copy(update={"sensors": ()}))
     with pytest.raises(ValueError, match="modality 'heightmap' is not observed"):
-        TerrainFeatures(DummyVecEnv(fns), CountingEncoder())
+        TerrainEmbedding(env, CountingEncoder())
+    with pytest.raises(ValueError, match="lack a terrain embedding"):
+        TerrainFeatures(DummyVecEnv([lambda: env]), expect_embedding=True)
+    env.close()
 
 
 def tiny(tmp_path: Path, *extra: str) -> Params:

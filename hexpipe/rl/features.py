@@ -1,18 +1,28 @@
 """The policy's input: body state + CPG parameters + the frozen VAE embedding of the terrain sensor.
 
-`TerrainFeatures` wraps a VecEnv of raw Dict observations and encodes the sensor once per environment step, batched
-across environments, so PPO stores 27 numbers per step and never re-encodes images in its update epochs.
+Two pieces, one per process:
+
+* `TerrainEmbedding` (a gymnasium wrapper, in each env's worker process) replaces the sensor frame with the frozen
+  encoder's 8-d posterior mean. Encoding then runs in parallel across the workers, beside their physics, and only
+  the embedding crosses the pipe to the learner (issue 12: encoding in the learner, between synchronous env steps,
+  cost about a quarter of train-ppo's wall time).
+* `TerrainFeatures` (a VecEnv wrapper, in the learner) lays the Dict out as one float32 vector
+  [body, cpg, embedding], so PPO stores 27 numbers per step and never re-encodes in its update epochs.
+
+`feature_vector` is that layout for one raw observation: what a loaded policy computes at run time.
 """
 
 from __future__ import annotations
 
-from typing import Protocol
+from typing import Any, Protocol
 
+import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 from stable_baselines3.common.vec_env import VecEnv, VecEnvWrapper
 
 PROPRIOCEPTIVE_KEYS = ("body", "cpg")
+EMBEDDING = "embedding"  # the observation key TerrainEmbedding adds
 
 
 class Encoder(Protocol):
@@ -22,42 +32,65 @@ class Encoder(Protocol):
     def encode(self, batch: np.ndarray) -> np.ndarray: ...
 
 
-class TerrainFeatures(VecEnvWrapper):
-    """Dict observations -> one float32 vector [body, cpg, embedding] (no embedding for a blind policy)."""
+class TerrainEmbedding(gym.ObservationWrapper):
+    """Dict observation with a sensor frame -> the same Dict with `embedding` (latent_dim,) in the frame's place."""
 
-    def __init__(self, venv: VecEnv, encoder: Encoder | None, frame_shape: tuple[int, ...] | None = None):
+    def __init__(self, env: gym.Env, encoder: Encoder, frame_shape: tuple[int, ...] | None = None):
         """frame_shape: one sensor reading's shape (`Sensor.frame_shape`), which the encoder takes; the observation
         may hold it flattened (the height map). None: the observation's own shape."""
+        super().__init__(env)
+        raw: spaces.Dict = env.observation_space  # type: ignore[assignment]
+        if encoder.modality not in raw.spaces:
+            raise ValueError(
+                f"encoder modality '{encoder.modality}' is not observed by the env (sensors: {sorted(raw.spaces)})"
+            )
         self.encoder = encoder
-        self.frame_shape = frame_shape
+        self.frame_shape = frame_shape or raw[encoder.modality].shape
+        kept = {k: v for k, v in raw.spaces.items() if k != encoder.modality}
+        latent = spaces.Box(-np.inf, np.inf, shape=(encoder.latent_dim,), dtype=np.float32)
+        self.observation_space = spaces.Dict({**kept, EMBEDDING: latent})
+
+    def observation(self, observation: dict[str, Any]) -> dict[str, Any]:
+        frame = np.asarray(observation[self.encoder.modality]).reshape(1, *self.frame_shape)
+        out = {k: v for k, v in observation.items() if k != self.encoder.modality}
+        out[EMBEDDING] = self.encoder.encode(frame)[0].astype(np.float32)
+        return out
+
+
+def feature_vector(obs: dict[str, Any], encoder: Encoder | None, frame_shape: tuple[int, ...] | None) -> np.ndarray:
+    """One raw observation -> (1, dim) float32 [body, cpg, embedding], exactly as training lays it out."""
+    parts = [np.asarray(obs[k], dtype=np.float32).reshape(1, -1) for k in PROPRIOCEPTIVE_KEYS]
+    if encoder is not None:
+        frame = np.asarray(obs[encoder.modality]).reshape(1, *(frame_shape or np.shape(obs[encoder.modality])))
+        parts.append(encoder.encode(frame).astype(np.float32).reshape(1, -1))
+    return np.concatenate(parts, axis=1)
+
+
+class TerrainFeatures(VecEnvWrapper):
+    """Dict observations (embedded in the envs, or none for a blind policy) -> one float32 vector per env."""
+
+    def __init__(self, venv: VecEnv, expect_embedding: bool | None = None):
+        """expect_embedding: True/False refuses envs that do not / do carry an embedding (None: take either)."""
         raw: spaces.Dict = venv.observation_space  # type: ignore[assignment]
-        dim = sum(int(np.prod(raw[k].shape)) for k in PROPRIOCEPTIVE_KEYS)
-        if encoder is not None:
-            if encoder.modality not in raw.spaces:
-                raise ValueError(
-                    f"encoder modality '{encoder.modality}' is not observed by the env (sensors: {sorted(raw.spaces)})"
-                )
-            dim += encoder.latent_dim
+        self.keys = PROPRIOCEPTIVE_KEYS + ((EMBEDDING,) if EMBEDDING in raw.spaces else ())
+        if expect_embedding is not None and (EMBEDDING in raw.spaces) != expect_embedding:
+            raise ValueError(f"the envs {'lack' if expect_embedding else 'carry'} a terrain embedding "
+                             f"(observation keys: {sorted(raw.spaces)})")
+        dim = sum(int(np.prod(raw[k].shape)) for k in self.keys)
         super().__init__(venv, observation_space=spaces.Box(-np.inf, np.inf, shape=(dim,), dtype=np.float32))
 
     def features(self, obs: dict[str, np.ndarray]) -> np.ndarray:
         """Batched: every value has a leading env axis."""
-        parts = [np.asarray(obs[k], dtype=np.float32) for k in PROPRIOCEPTIVE_KEYS]
-        if self.encoder is not None:
-            sensor = np.asarray(obs[self.encoder.modality])
-            if self.frame_shape is not None:
-                sensor = sensor.reshape(len(sensor), *self.frame_shape)
-            parts.append(self.encoder.encode(sensor).astype(np.float32))
-        return np.concatenate(parts, axis=1)
+        n = len(obs[self.keys[0]])
+        return np.concatenate([np.asarray(obs[k], dtype=np.float32).reshape(n, -1) for k in self.keys], axis=1)
 
     def reset(self) -> np.ndarray:
         return self.features(self.venv.reset())
 
     def step_wait(self):
         obs, rewards, dones, infos = self.venv.step_wait()
-        terminal = [i for i, info in enumerate(infos) if "terminal_observation" in info]
-        if terminal:  # encode all finished episodes' last observations in one batch
-            batch = {k: np.stack([infos[i]["terminal_observation"][k] for i in terminal]) for k in obs}
-            for i, row in zip(terminal, self.features(batch), strict=True):
-                infos[i]["terminal_observation"] = row
+        for info in infos:
+            if "terminal_observation" in info:
+                last = info["terminal_observation"]
+                info["terminal_observation"] = self.features({k: np.asarray(last[k])[None] for k in self.keys})[0]
         return self.features(obs), rewards, dones, infos

@@ -22,7 +22,7 @@ import numpy as np
 
 from hexpipe import sensors as registry
 from hexpipe.config import CpgConfig, Params, SensorConfig, SimConfig
-from hexpipe.rl.features import PROPRIOCEPTIVE_KEYS, Encoder
+from hexpipe.rl.features import PROPRIOCEPTIVE_KEYS, Encoder, feature_vector
 from hexpipe.rl.inference import WEIGHTS, WEIGHTS_CONFIG, ObservationNormaliser, load_weights
 from hexpipe.rl.train import POLICY_CONFIG
 from hexpipe.validation import one_line
@@ -69,12 +69,8 @@ class LoadedPolicy:
 
     def features(self, obs: dict[str, np.ndarray]) -> np.ndarray:
         """One observation -> (1, observation_dim) float32, laid out as `TerrainFeatures.features`."""
-        parts = [np.asarray(obs[k], dtype=np.float32).reshape(1, -1) for k in PROPRIOCEPTIVE_KEYS]
-        if self.encoder is not None:
-            frame_shape = registry.get(self.encoder.modality).frame_shape(self.params.sensors)
-            sensor = np.asarray(obs[self.encoder.modality]).reshape(1, *frame_shape)
-            parts.append(self.encoder.encode(sensor).astype(np.float32))
-        return np.concatenate(parts, axis=1)
+        shape = None if self.encoder is None else registry.get(self.encoder.modality).frame_shape(self.params.sensors)
+        return feature_vector(obs, self.encoder, shape)
 
     def predict(self, obs: dict[str, np.ndarray]) -> np.ndarray:
         """Deterministic action in [-1, 1]^3 (d²/dt² of a, b, omega, scaled) for one raw observation."""

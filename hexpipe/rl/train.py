@@ -29,7 +29,7 @@ from hexpipe.rl.checkpoint import (
     save_policy,
 )
 from hexpipe.rl.curriculum import Curriculum, CurriculumStats
-from hexpipe.rl.features import TerrainFeatures
+from hexpipe.rl.features import Encoder, TerrainEmbedding, TerrainFeatures
 from hexpipe.rl.inference import export_weights
 from hexpipe.speed import SPEED_JSON, move_speed
 from hexpipe.workers import die_with_parent
@@ -38,24 +38,34 @@ POLICY_CONFIG = "policy.json"
 PPO_SPEED = ("time",)  # dvclive's time/* metrics: steps per second, measured, not results
 
 
-def env_factory(params: Params, terrain: str, sensors: tuple[str, ...], randomize: bool) -> Callable[[], gym.Env]:
-    """A picklable constructor for one environment (SubprocVecEnv builds it in the worker); with ppo.curriculum it
-    keeps its own difficulty level (hexpipe/rl/curriculum.py)."""
+def env_factory(params: Params, terrain: str, encoder: Encoder | None, randomize: bool) -> Callable[[], gym.Env]:
+    """A picklable constructor for one environment (SubprocVecEnv builds it in the worker): it observes the
+    encoder's sensor and embeds it there (`TerrainEmbedding`); with ppo.curriculum it keeps its own difficulty level
+    (hexpipe/rl/curriculum.py)."""
     parent = os.getpid()
+    sensors = () if encoder is None else (encoder.modality,)
 
     def make() -> gym.Env:
         die_with_parent(parent)  # in a SubprocVecEnv worker: no orphan after a kill -9 of train-ppo
-        env = HexapodEnv.from_params(params, terrain, obs_sensors=sensors, randomize=randomize)
-        return Curriculum(env, goal=params.task.goal_distance) if params.ppo.curriculum else env
+        env: gym.Env = HexapodEnv.from_params(params, terrain, obs_sensors=sensors, randomize=randomize)
+        if params.ppo.curriculum:
+            env = Curriculum(env, goal=params.task.goal_distance)
+        if encoder is None:
+            return env
+        import torch
+
+        torch.set_num_threads(1)  # one core per worker: the workers already fill the machine
+        return TerrainEmbedding(env, encoder, registry.get(encoder.modality).frame_shape(params.sensors))
 
     return make
 
 
 def make_vec_env(
-    params: Params, terrains: tuple[str, ...], n_envs: int, sensors: tuple[str, ...], randomize: bool, seed: int
+    params: Params, terrains: tuple[str, ...], n_envs: int, encoder: Encoder | None, randomize: bool, seed: int
 ) -> VecEnv:
-    """n_envs raw environments cycling through `terrains`, in worker processes when n_envs > 1."""
-    fns = [env_factory(params, terrains[i % len(terrains)], sensors, randomize) for i in range(n_envs)]
+    """n_envs environments cycling through `terrains`, in worker processes when n_envs > 1, each embedding its own
+    sensor frames with `encoder` (None: blind, no sensor)."""
+    fns = [env_factory(params, terrains[i % len(terrains)], encoder, randomize) for i in range(n_envs)]
     venv = SubprocVecEnv(fns, start_method="fork") if n_envs > 1 else DummyVecEnv(fns)
     venv.seed(seed)
     return venv
@@ -70,16 +80,12 @@ def load_terrain_encoder(params: Params):
     return load_encoder(params.ppo.encoder_dir)
 
 
-def wrap_features(venv: VecEnv, encoder, params: Params) -> TerrainFeatures:
-    shape = None if encoder is None else registry.get(encoder.modality).frame_shape(params.sensors)
-    return TerrainFeatures(venv, encoder, frame_shape=shape)
-
-
 class EnvClock(VecEnvWrapper):
     """Times the raw vectorised env inside training: its own steps/s on the very steps PPO collects.
 
     Between step_async and step_wait the learner waits on the env workers, so `seconds` is the env's share of the
-    run (physics and sensors, no encoder, no learner), measured under the same load as the training around it.
+    run (physics, sensor and its frozen encoder: the observation the policy consumes; no learner), measured under
+    the same load as the training around it.
     """
 
     def __init__(self, venv: VecEnv):
@@ -216,9 +222,8 @@ def train_ppo(params: Params, resume: bool = False, show_progress: bool = True) 
     newest = checkpoint_step(candidates[0]) if candidates else 0
     if newest >= cfg.total_timesteps and _finished(out_dir, signature, newest):
         return {"finished": True, "timesteps": newest}
-    sensors = () if encoder is None else (encoder.modality,)
-    clock = EnvClock(make_vec_env(params, cfg.train_terrains, cfg.n_envs, sensors, cfg.randomize, cfg.seed))
-    venv = wrap_features(clock, encoder, params)
+    clock = EnvClock(make_vec_env(params, cfg.train_terrains, cfg.n_envs, encoder, cfg.randomize, cfg.seed))
+    venv = TerrainFeatures(clock, expect_embedding=encoder is not None)
 
     loaded = load_checkpoint(candidates, venv) if candidates else None
     if loaded is None and candidates:  # none loads: start over in a clean, re-stamped folder
