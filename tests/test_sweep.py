@@ -62,10 +62,10 @@ def test_grid_expands_conditions_by_seeds_and_refuses_owned_keys(tmp_path):
     params = load_params(ROOT / "params.yaml", sets(tmp_path, "sweep.name=g", "sweep.seeds=[3, 4]",
                                                     "sweep.conditions={a: [], b: [ppo.blind=true]}"))
     trials = expand(params)
-    assert [t.name for t in trials] == ["a-seed3", "a-seed4", "b-seed3", "b-seed4"]
-    assert [t.params.ppo.seed for t in trials] == [3, 4, 3, 4] and trials[2].params.ppo.blind
-    assert trials[1].params.ppo.out_dir == str(tmp_path / "data" / "g" / "a-seed4" / "ppo")
-    assert trials[1].params.eval.report_dir == str(tmp_path / "reports" / "g" / "a-seed4" / "eval")
+    assert [t.name for t in trials] == ["a-seed3", "b-seed3", "a-seed4", "b-seed4"]  # seed-major
+    assert [t.params.ppo.seed for t in trials] == [3, 3, 4, 4] and trials[1].params.ppo.blind
+    assert trials[2].params.ppo.out_dir == str(tmp_path / "data" / "g" / "a-seed4" / "ppo")
+    assert trials[2].params.eval.report_dir == str(tmp_path / "reports" / "g" / "a-seed4" / "eval")
     assert not trials[0].params.eval.record_video and trials[0].params.eval.log_episodes == 0
     assert len({t.key for t in trials}) == 4 and trials[0].cpus == 1
     same = expand(load_params(ROOT / "params.yaml", [*sets(tmp_path, "sweep.name=g", "sweep.seeds=[3, 4]",

@@ -57,15 +57,17 @@ def parse_condition(text: str) -> tuple[str, tuple[str, ...]]:
 
 
 def expand(params: Params) -> list[Trial]:
-    """Every (condition, seed) of params.sweep, condition-major, each validated (ConfigError names the condition)."""
+    """Every (condition, seed) of params.sweep, seed-major (every condition's first seed, then the second, ...: a
+    sweep stopped half-way has comparable conditions), each validated (ConfigError names the condition)."""
     cfg = params.sweep
-    trials = []
     for condition, overrides in cfg.conditions.items():
         for text in overrides:
             key, _ = parse_override(text)
             if key in OWNED or key.startswith("sweep."):
                 raise ConfigError(f"sweep condition '{condition}': {key} is set by the sweep for each trial")
-        for seed in cfg.seeds:
+    trials = []
+    for seed in cfg.seeds:
+        for condition, overrides in cfg.conditions.items():
             name = f"{condition}-seed{seed}"
             data, report = trial_dirs(params, name)
             own = [f"ppo.seed={seed}", f"ppo.out_dir={data / 'ppo'}", f"ppo.report_dir={report / 'ppo'}",
