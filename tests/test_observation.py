@@ -109,6 +109,6 @@ def test_a_policy_trained_without_position_loads_only_with_that_setting(tmp_path
     obs, _ = env.reset(seed=0)
     assert policy.predict(obs).shape == (3,)
     env.close()
-    paper = load_params(root / "params.yaml", tiny)
+    paper = load_params(root / "params.yaml", [*tiny, "task.observe_position=true"])
     with pytest.raises(PolicyError, match=r"task\.observe_position=false, params now have true"):
         load_policy(tmp_path / "ppo", paper)

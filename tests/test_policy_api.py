@@ -84,7 +84,7 @@ def test_the_weights_only_policy_acts_exactly_as_the_sb3_zip_and_vecnormalize(se
     finally:
         env.close()
     weights = json.loads((seeing / "policy" / "weights.json").read_text())
-    assert weights["observation_dim"] == 27 and weights["net_arch"] == [64, 64] and weights["activation"] == "Tanh"
+    assert weights["observation_dim"] == 25 and weights["net_arch"] == [64, 64] and weights["activation"] == "Tanh"
 
 
 def test_the_readme_snippet_runs(seeing, tmp_path):
@@ -163,7 +163,7 @@ def test_weights_that_do_not_fit_their_description_are_one_line(seeing, tmp_path
         ({"net_arch": [32, 32]}, "does not match"),
         ({"activation": "os.system"}, "activation 'os.system' is not one of"),
         ({"observation_normalisation": {"mean": [0.0], "var": [1.0], "epsilon": 1e-8, "clip": 10.0}},
-         "observation_normalisation needs mean and var of length 27"),
+         "observation_normalisation needs mean and var of length 25"),
         ({"format_version": 99}, "format_version 99"),
     ]:
         spec.write_text(json.dumps({**good, **change}))

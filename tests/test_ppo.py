@@ -33,13 +33,13 @@ def test_each_env_embeds_its_own_frames_and_terminal_observations_keep_the_layou
     fns = [lambda: TerrainEmbedding(HexapodEnv("single_block", task=task), encoder, frame_shape=(32, 32))] * 2
     venv = TerrainFeatures(DummyVecEnv(fns), expect_embedding=True)
     obs = venv.reset()
-    assert obs.shape == (2, 13 + 6 + 8) and venv.observation_space.shape == (27,)
+    assert obs.shape == (2, 11 + 6 + 8) and venv.observation_space.shape == (25,)  # body without x, y
     for _ in range(4):  # 0.2 s = 4 steps: every env truncates on the 4th
         obs, _, dones, infos = venv.step(np.zeros((2, 3), dtype=np.float32))
     assert dones.all()
-    assert all(info["terminal_observation"].shape == (27,) for info in infos)
+    assert all(info["terminal_observation"].shape == (25,) for info in infos)
     # the embedding is the encoder's output on the frame (CountingEncoder: the frame's mean in every latent dim)
-    assert np.all(obs[:, 19:] == obs[:, 19:20])
+    assert np.all(obs[:, 17:] == obs[:, 17:18])
     # one single-frame call per env per reset and step, plus the auto-reset after the last step
     assert encoder.calls == [(1, 32, 32)] * (2 * (1 + 4 + 1))
     venv.close()
@@ -72,7 +72,7 @@ def test_tiny_training_with_an_encoder_writes_policy_reports_and_checkpoints(tmp
     # the env's own rate, timed on the same steps: training around it (encoder, learner) can only be slower
     assert metrics["time/bare_env_steps_per_s"] > metrics["time/train_steps_per_s"] > 0
     config = json.loads((tmp_path / "ppo" / "policy.json").read_text())
-    assert config["observation_dim"] == 27 and config["modality"] == "heightmap" and not config["blind"]
+    assert config["observation_dim"] == 25 and config["modality"] == "heightmap" and not config["blind"]
     assert (tmp_path / "ppo" / "policy" / "model.zip").is_file()
     assert (tmp_path / "ppo" / "policy" / "vecnormalize.pkl").is_file()
     summary = json.loads((tmp_path / "reports" / "metrics.json").read_text())
