@@ -1,5 +1,5 @@
-"""The sweep's outputs in reports/sweeps/NAME: metrics.json, results.csv, episodes.csv, trials.csv, report.md and
-figures, every file written atomically (metrics.json last).
+"""The sweep's outputs in reports/sweeps/NAME: metrics.json, results.csv, episodes.csv, trials.csv, targets.csv,
+targets_per_terrain.csv, report.md and figures, every file written atomically (metrics.json last).
 
 - success.png: success rate per terrain and condition (bars: mean over seeds, whiskers: bootstrap interval over
   seeds, dots: each seed);
@@ -19,7 +19,7 @@ import numpy as np
 import pandas as pd
 
 from hexpipe.atomic import atomic_path, write_json, write_text
-from hexpipe.sweep.tables import ALL, Cell, pareto_front
+from hexpipe.sweep.tables import ALL, BLIND, Cell, issue10_targets, pareto_front, target_numbers
 
 
 @dataclass
@@ -39,6 +39,9 @@ class SweepReport:
     flat_terrain: str
     confidence: float
     notes: list[str] = field(default_factory=list)
+    targets: pd.DataFrame = field(default_factory=pd.DataFrame)  # tables.judge_targets: condition x target
+    target_parts: pd.DataFrame = field(default_factory=pd.DataFrame)  # tables.target_parts: ... x terrain
+    perception: list[dict[str, Any]] | None = None  # tables.perception_misses of BLIND; None: no BLIND condition
 
 
 def _save(fig: Any, path: Path) -> None:
@@ -138,6 +141,71 @@ def results_rows(table: dict[str, dict[str, Cell]]) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
+def _estimate(value: float, low: float, high: float, spec: str) -> str:
+    """'value [low, high]', the value alone without an interval, '-' without a value."""
+    if not np.isfinite(value):
+        return "-"
+    out = format(value, spec)
+    return f"{out} [{format(low, spec)}, {format(high, spec)}]" if np.isfinite([low, high]).all() else out
+
+
+def _target_spec(target: str) -> str:
+    return ".1f" if "time" in target else ".2f"
+
+
+def targets_section(report: SweepReport) -> str:
+    """'## Issue 10 targets': target x condition, each 'value [low, high] ✓/✗', the met counts, perception."""
+    judged, level = report.targets, f"{report.confidence:.0%}"
+    conditions = list(dict.fromkeys(judged["condition"])) if len(judged) else []
+    if not conditions:
+        return "## Issue 10 targets\n\n_No complete trial has policy episodes to judge._"
+    complete = report.trials[report.trials["status"] == "ok"].groupby("condition").size()
+    rows = []
+    for goal in issue10_targets(report.flat_terrain):
+        target, mine = goal.key, judged[judged["target"] == goal.key]
+        cells = []
+        for condition in conditions:
+            row = mine[mine["condition"] == condition]
+            if row.empty:
+                cells.append("-")
+                continue
+            r = row.iloc[0]
+            cell = f"{_estimate(r.value, r.low, r.high, _target_spec(target))} {'✓' if r.met else '✗'}"
+            if len(goal.terrains) != 1:  # over several terrains: name the worst
+                cell += f" ({r.terrain})"
+            if 0 < r.seeds < complete.get(condition, 0):
+                cell += f" ({r.seeds} seed{'s' if r.seeds != 1 else ''})"
+            cells.append(cell)
+        rows.append((goal.label, f"{'≥' if goal.above else '≤'} {goal.threshold:g}", *cells))
+    met = judged.groupby("condition", sort=False)["met"].agg(["sum", "size"])
+    rows.append(("**met**", "", *(f"{int(met.loc[c, 'sum'])} of {int(met.loc[c, 'size'])}" for c in conditions)))
+    reference = conditions[0]
+    if report.perception is None:
+        perception = (f"**Perception matters:** not judged: no condition named `{BLIND}` besides the first "
+                      f"(`{reference}`).")
+    elif not report.perception:
+        perception = (f"**Perception matters** (`{BLIND}` against `{reference}`): no. `{BLIND}` misses no target "
+                      f"by a margin outside the intervals.")
+    else:
+        missed = [f"{m['target']} on {m['terrain']}: "
+                  f"{_estimate(m['value'], m['low'], m['high'], _target_spec(m['target']))} against "
+                  f"{_estimate(m['reference'], m['reference_low'], m['reference_high'], _target_spec(m['target']))}"
+                  for m in report.perception]
+        perception = (f"**Perception matters** (`{BLIND}` against `{reference}`): yes. `{BLIND}` misses, with "
+                      f"intervals apart: " + "; ".join(missed) + ".")
+    return (
+        "## Issue 10 targets\n\n"
+        "The learned policy (controller `policy`) of each condition against issue 10's targets. Each value is the "
+        "mean over training seeds of a per-seed figure, with its "
+        f"{level} percentile bootstrap interval over seeds; ✓/✗ is decided on that mean, and the interval shows "
+        "whether it is clear of the threshold. Success is each seed's success rate; time to goal and cost of "
+        "transport are over the episodes that reached the goal. A comparison with the best fixed gait is per seed, "
+        "against the `best_fixed` controller of the same trial on the same episodes. A target over several terrains "
+        "shows its worst terrain, named in brackets (every terrain: targets_per_terrain.csv). \"-\": not "
+        "measured.\n\n"
+        + _table(("target", "threshold", *(f"`{c}`" for c in conditions)), rows) + "\n\n" + perception)
+
+
 def markdown(report: SweepReport, front: list[str] | None) -> str:
     level = f"{report.confidence:.0%}"
     grid = [(f"`{c}`", ", ".join(f"`{o}`" for o in o_) or "(params as given)",
@@ -177,6 +245,7 @@ def markdown(report: SweepReport, front: list[str] | None) -> str:
         + _table(("terrain", "condition", "success (episodes)", "success (seeds)", "IQM", "time to goal (s)",
                   "cost of transport", "seeds", "episodes"), results),
     ]
+    parts.append(targets_section(report))
     if improvement:
         parts.append(
             "## Probability of improvement\n\nP(a > b): the chance that a seed of condition a has a higher success "
@@ -198,9 +267,11 @@ def markdown(report: SweepReport, front: list[str] | None) -> str:
 def write_report(out_dir: Path, report: SweepReport) -> list[Path]:
     """Write every file of the sweep's report; metrics.json last, so its presence means the rest is there."""
     out_dir.mkdir(parents=True, exist_ok=True)
-    written = [out_dir / n for n in ("results.csv", "episodes.csv", "per_seed.csv", "trials.csv")]
-    for path, frame in zip(written, (results_rows(report.table), report.episodes, report.per_seed, report.trials),
-                           strict=True):
+    written = [out_dir / n for n in ("results.csv", "episodes.csv", "per_seed.csv", "trials.csv", "targets.csv",
+                                     "targets_per_terrain.csv")]
+    frames = (results_rows(report.table), report.episodes, report.per_seed, report.trials, report.targets,
+              report.target_parts)
+    for path, frame in zip(written, frames, strict=True):
         write_text(path, frame.to_csv(index=False))
     front = None
     if report.table:
@@ -218,5 +289,6 @@ def write_report(out_dir: Path, report: SweepReport) -> list[Path]:
         "conditions": report.table, "improvement": report.improvement,
         "trials": {"complete": int((trials["status"] == "ok").sum()), "failed": int((trials["status"] == "failed")
                                                                                     .sum()), "total": len(trials)},
+        **(target_numbers(report.targets, report.target_parts, report.perception) if len(report.targets) else {}),
     })
     return [*written, out_dir / "report.md", out_dir / "metrics.json"]

@@ -41,7 +41,16 @@ def build_report(params: Params, trials: list[Trial], outcome: Outcome, command:
     table = tables.summarise(seeds, conditions, terrains, *args)
     pairs = tables.default_pairs([c for c in conditions if c in table], cfg.compare) if table else []
     trials_df = trials_frame(params, trials, outcome)
+    ran = [c for c in conditions if c in table]
+    parts = tables.target_parts(episodes, ran, cfg.flat_terrain, *args)
+    blind = tables.BLIND in ran[1:]
     notes = []
+    unread = [c for c in ran if tables.HOME_TERRAIN in set(seeds.loc[seeds["condition"] == c, "terrain"])
+              and not ((parts["condition"] == c) & (parts["target"] == "adaptation")).any()]
+    if unread:
+        notes.append(f"Adaptation shows \"-\" for {', '.join(unread)}: their trial records have no b_before_block / "
+                     "b_open (recorded from before the sweep kept them); refresh the records from each trial's "
+                     "eval/results.csv.")
     missing = trials_df[trials_df["status"] != "ok"]
     if len(missing):
         notes.append(f"{len(missing)} of {len(trials_df)} trials have no result ({', '.join(missing['trial'])}): "
@@ -54,6 +63,8 @@ def build_report(params: Params, trials: list[Trial], outcome: Outcome, command:
         name=cfg.name, command=command, conditions=dict(cfg.conditions), seeds=cfg.seeds, terrains=terrains,
         table=table, improvement=tables.improvements(seeds, pairs, terrains, *args), per_seed=seeds,
         episodes=episodes, trials=trials_df, flat_terrain=cfg.flat_terrain, confidence=cfg.confidence, notes=notes,
+        targets=tables.judge_targets(parts, ran, cfg.flat_terrain), target_parts=parts,
+        perception=tables.perception_misses(parts, cfg.flat_terrain, tables.BLIND, ran[0]) if blind else None,
     )
 
 
