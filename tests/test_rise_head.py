@@ -14,8 +14,9 @@ from test_probes import frames
 
 from hexpipe.config import ConfigError, VaeConfig, load_params
 from hexpipe.models.rise_head import RiseHead, RiseScale, rise_loss, rise_targets
-from hexpipe.models.train_vae import objective, train_vae
+from hexpipe.models.train_vae import objective, train_step, train_vae
 from hexpipe.models.vae import ConvVAE
+from hexpipe.models.vae_data import build_dataset
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -59,28 +60,44 @@ def test_weight_zero_is_exactly_the_plain_vae_loss() -> None:
     plain = objective(model, x, 0.25, torch.Generator().manual_seed(1))
     zero = objective(model, x, 0.25, torch.Generator().manual_seed(1), head, targets, 0.0)
     weighted = objective(model, x, 0.25, torch.Generator().manual_seed(1), head, targets, 2.0)
-    assert float(zero[0]) == float(plain[0]) and float(zero[3]) == 0.0
-    assert float(weighted[0]) == pytest.approx(float(plain[0]) + 2.0 * float(weighted[3]))
-    assert float(weighted[3]) > 0 and torch.isfinite(weighted[0])
+    assert zero[0].item() == plain[0].item() and zero[3].item() == 0.0
+    assert weighted[0].item() == pytest.approx(plain[0].item() + 2.0 * weighted[3].item())
+    assert weighted[3].item() > 0 and torch.isfinite(weighted[0])
+
+
+def test_train_step_fits_the_head_through_the_encoder() -> None:
+    """60 steps on one batch: the rise loss (masked rows included) falls below 60% of its start, so the head's
+    gradient is applied and reaches the latent."""
+    torch.manual_seed(0)
+    data = build_dataset(frames("heightmap", episodes=2), "heightmap", 16)  # 48 frames, a third with no rise
+    targets = rise_targets(data.rise_distance, data.rise_height, RiseScale.fit(data.rise_distance, data.rise_height))
+    model, head = ConvVAE(1, 16), RiseHead(8)
+    optimizer = torch.optim.Adam([*model.parameters(), *head.parameters()], lr=3e-3)
+    noise, x = torch.Generator().manual_seed(0), data.batch(np.arange(len(data)))
+    rise = [train_step(model, optimizer, x, 0.25, noise, head, targets, 5.0)[3] for _ in range(60)]
+    assert all(math.isfinite(r) for r in rise) and np.mean(rise[-5:]) < 0.6 * np.mean(rise[:5])
 
 
 def _cfg(root: Path, name: str, **overrides: object) -> VaeConfig:
-    settings: dict[str, object] = {"image_size": 32, "batch_size": 32, "epochs": 5, "out_dir": str(root / name / "m"),
-                                   "report_dir": str(root / name / "r"), "data_dir": str(root / "none")}
+    settings: dict[str, object] = {"image_size": 16, "batch_size": 32, "epochs": 4, "val_fraction": 0.5,
+                                   "out_dir": str(root / name / "m"), "report_dir": str(root / name / "r"),
+                                   "data_dir": str(root / "none")}
     return VaeConfig(**(settings | overrides))
 
 
 def test_the_head_makes_the_rise_linearly_readable(tmp_path: Path) -> None:
-    """Same data, seed and epochs: with the head, the head's own loss falls and the ridge probe of the distance to
-    the rise (on held-out episodes) beats the plain VAE's. Without a head there is no rise loss to report."""
+    """Same data, seed and epochs (6 held-out episodes): with the head, its loss falls over the epochs and the ridge
+    probes of the rise's distance and height on held-out episodes beat the plain VAE's (were the head's gradient
+    lost, the two runs would train the same encoder bit for bit). Without a head there is no rise loss."""
     plain = train_vae(_cfg(tmp_path, "plain", feature_weight=0.0), frames("heightmap", episodes=12))
     aux_cfg = _cfg(tmp_path, "aux", feature_weight=5.0)
     aux = train_vae(aux_cfg, frames("heightmap", episodes=12))
     assert "val/rise" not in plain and math.isfinite(aux["val/rise"])
     curve = (Path(aux_cfg.report_dir) / "plots" / "metrics" / "train" / "rise.tsv").read_text().splitlines()[1:]
     rise = [float(line.split("\t")[-1]) for line in curve]
-    assert len(rise) == 5 and rise[-1] < 0.5 * rise[0]
-    assert aux["probe/rise_distance_r2"] > max(0.8, plain["probe/rise_distance_r2"] + 0.1)
+    assert len(rise) == 4 and rise[-1] < 0.95 * rise[0]
+    for name in ("rise_distance_r2", "rise_height_r2"):
+        assert aux[f"probe/{name}"] > plain[f"probe/{name}"], name
     saved = json.loads((Path(aux_cfg.out_dir) / "encoder.json").read_text())
     assert saved["latent_dim"] == 8 and "head" not in json.dumps(saved)  # the export is the plain encoder
 
