@@ -202,6 +202,9 @@ class VaeConfig(_Section):
     latent_dim: PositiveInt = 8
     beta: Annotated[float, Field(ge=0)] = 0.25  # 1.0 gave a linear probe of 0.87; 0.25 gives 0.94 (reports/vae)
     image_size: PositiveInt = 32  # inputs are resized to image_size x image_size (32: the height map's own)
+    # weight of the training-only linear head from the latent mean to the next rise's distance and height
+    # (hexpipe/models/rise_head.py); 0 is the plain VAE. See reports/experiments/vae_aux for the measurement.
+    feature_weight: Annotated[float, Field(ge=0)] = 1.0
     epochs: PositiveInt = 30
     batch_size: PositiveInt = 64
     learning_rate: PositiveFloat = 1e-3

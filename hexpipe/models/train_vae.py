@@ -4,7 +4,8 @@ The dataset is `vae_data` (frames streamed once into compact arrays, split by ep
 resumable training loop and the stage around it. Reports go to dvclive under `report_dir`: per-epoch loss curves,
 final metrics and the figures of `vae_report` (a reconstruction grid, a 2-D PCA map of the latents), with the
 `probes` of what the latent holds: a linear probe for "block within 1 m ahead", and ridge-regression probes from
-the latent to what the gait needs: the distance to the next rise ahead and that rise's height.
+the latent to what the gait needs: the distance to the next rise ahead and that rise's height. With
+`vae.feature_weight` > 0 a training-only linear head (`rise_head`) makes the latent carry those two linearly.
 """
 
 from __future__ import annotations
@@ -33,6 +34,7 @@ from rich.progress import (
 from hexpipe.atomic import atomic_path
 from hexpipe.config import VaeConfig
 from hexpipe.models.probes import PROBE_DISTANCE_M, active_dims, knn_accuracy, linear_probe, rise_probes
+from hexpipe.models.rise_head import RiseHead, RiseScale, rise_loss, rise_targets
 from hexpipe.models.vae import (
     DEFAULT_CHANNELS,
     ConvVAE,
@@ -51,6 +53,7 @@ CHECKPOINT = "checkpoint.pt"
 CHECKPOINT_VERSION = 1
 _EVAL_BATCH = 512
 _EPOCH_KEYS = ("train/recon", "train/kl", "train/loss", "val/recon", "val/kl", "val/loss")
+_RISE_KEYS = ("train/rise", "val/rise")  # the aux head's loss, logged only when it trains (feature_weight > 0)
 
 
 def configure_threads() -> int:
@@ -63,33 +66,70 @@ def configure_threads() -> int:
     return torch.get_num_threads()
 
 
-def train_step(
-    model: ConvVAE, optimizer: torch.optim.Optimizer, x: torch.Tensor, beta: float, noise: torch.Generator
-) -> tuple[float, float, float]:
-    """One optimiser step on batch x; returns per-image (loss, recon, kl) of this batch."""
+def objective(
+    model: ConvVAE,
+    x: torch.Tensor,
+    beta: float,
+    noise: torch.Generator,
+    head: RiseHead | None = None,
+    targets: torch.Tensor | None = None,
+    weight: float = 0.0,
+) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor]:
+    """Per-image (loss, recon, kl, rise) of batch x: loss = recon + beta * KL + weight * rise, where rise is the
+    aux head's `rise_loss` on the latent means against `targets` (0 without a head or at weight 0, and then
+    loss is exactly the plain VAE loss)."""
     recon, mu, logvar = model(x, noise)
     loss = vae_loss(recon, x, mu, logvar, beta)
+    if head is None or targets is None or weight == 0:
+        return loss.total, loss.recon, loss.kl, torch.zeros(())
+    rise = rise_loss(head(mu), targets)
+    return loss.total + weight * rise, loss.recon, loss.kl, rise
+
+
+def train_step(
+    model: ConvVAE,
+    optimizer: torch.optim.Optimizer,
+    x: torch.Tensor,
+    beta: float,
+    noise: torch.Generator,
+    head: RiseHead | None = None,
+    targets: torch.Tensor | None = None,
+    weight: float = 0.0,
+) -> tuple[float, float, float, float]:
+    """One optimiser step on batch x (and the head, if any); returns per-image (loss, recon, kl, rise)."""
+    terms = objective(model, x, beta, noise, head, targets, weight)
     optimizer.zero_grad(set_to_none=True)
-    loss.total.backward()
+    terms[0].backward()
     optimizer.step()
-    return loss.total.item(), loss.recon.item(), loss.kl.item()
+    loss, recon, kl, rise = (t.item() for t in terms)
+    return loss, recon, kl, rise
 
 
 @torch.no_grad()
-def evaluate(model: ConvVAE, data: VaeDataset, idx: np.ndarray, beta: float, seed: int) -> dict[str, float]:
-    """Mean per-image recon / KL / loss on `idx`, with z sampled from a fixed-seed generator (comparable
-    across epochs and to the training figures)."""
+def evaluate(
+    model: ConvVAE,
+    data: VaeDataset,
+    idx: np.ndarray,
+    beta: float,
+    seed: int,
+    head: RiseHead | None = None,
+    targets: torch.Tensor | None = None,
+    weight: float = 0.0,
+) -> dict[str, float]:
+    """Mean per-image recon / KL / loss (and the head's rise loss) on `idx`, with z sampled from a fixed-seed
+    generator (comparable across epochs and to the training figures). `targets` covers all frames of `data`."""
     model.eval()
     noise = torch.Generator().manual_seed(seed)
-    totals = np.zeros(3)
+    totals = np.zeros(4)
     for start in range(0, len(idx), _EVAL_BATCH):
-        x = data.batch(idx[start : start + _EVAL_BATCH])
-        recon, mu, logvar = model(x, noise)
-        loss = vae_loss(recon, x, mu, logvar, beta)
-        totals += len(x) * np.array([loss.recon.item(), loss.kl.item(), loss.total.item()])
+        batch = idx[start : start + _EVAL_BATCH]
+        x = data.batch(batch)
+        terms = objective(model, x, beta, noise, head, None if targets is None else targets[batch], weight)
+        totals += len(x) * np.array([t.item() for t in terms])
     model.train()
-    recon_m, kl_m, loss_m = totals / max(1, len(idx))
-    return {"recon": float(recon_m), "kl": float(kl_m), "loss": float(loss_m)}
+    loss_m, recon_m, kl_m, rise_m = totals / max(1, len(idx))
+    out = {"recon": float(recon_m), "kl": float(kl_m), "loss": float(loss_m)}
+    return out | ({"rise": float(rise_m)} if head is not None else {})
 
 
 @torch.no_grad()
@@ -166,25 +206,32 @@ def _train_epoch(
     noise: torch.Generator,
     progress: Progress,
     epoch: int,
+    head: RiseHead | None = None,
+    targets: torch.Tensor | None = None,
 ) -> dict[str, float]:
     """One pass over the shuffled training frames; per-image means of the batch losses, and images/s
-    (batch assembly + optimiser steps, excluding evaluation)."""
+    (batch assembly + optimiser steps, excluding evaluation). `targets` covers all frames of `data`."""
     order = torch.from_numpy(train_idx)[torch.randperm(len(train_idx), generator=shuffle)]
     task = progress.add_task(f"epoch {epoch}/{cfg.epochs}", total=math.ceil(len(order) / cfg.batch_size), status="")
-    sums, seen, busy = np.zeros(3), 0, 0.0
+    sums, seen, busy = np.zeros(4), 0, 0.0
     for start in range(0, len(order), cfg.batch_size):
         tic = time.perf_counter()
-        x = data.batch(order[start : start + cfg.batch_size])
-        sums += len(x) * np.array(train_step(model, optimizer, x, cfg.beta, noise))
+        batch = order[start : start + cfg.batch_size]
+        x = data.batch(batch)
+        args = (model, optimizer, x, cfg.beta, noise)
+        if head is not None and targets is not None:
+            args += (head, targets[batch], cfg.feature_weight)
+        sums += len(x) * np.array(train_step(*args))
         busy += time.perf_counter() - tic
         seen += len(x)
         progress.update(task, advance=1, status=f"loss {sums[0] / seen:.2f}")
-    loss, recon, kl = sums / seen
+    loss, recon, kl, rise = sums / seen
     return {
         "epoch": float(epoch),
         "train/loss": float(loss),
         "train/recon": float(recon),
         "train/kl": float(kl),
+        **({"train/rise": float(rise)} if head is not None else {}),
         "images_per_s": seen / busy,
     }
 
@@ -208,7 +255,15 @@ def train_vae(cfg: VaeConfig, frames: Iterable[Frame] | None = None) -> dict[str
     out_dir.mkdir(parents=True, exist_ok=True)
     torch.manual_seed(cfg.seed)
     model = ConvVAE(channels_for(cfg.modality), cfg.image_size, cfg.latent_dim).to(memory_format=torch.channels_last)
-    optimizer = torch.optim.Adam(model.parameters(), lr=cfg.learning_rate)
+    # The aux head exists only at feature_weight > 0, so that 0 is the plain VAE to the bit (same init, same steps).
+    head = RiseHead(cfg.latent_dim) if cfg.feature_weight > 0 else None
+    targets = None
+    if head is not None:
+        scale = RiseScale.fit(data.rise_distance[train_idx], data.rise_height[train_idx])
+        targets = rise_targets(data.rise_distance, data.rise_height, scale)
+    epoch_keys = _EPOCH_KEYS + (_RISE_KEYS if head is not None else ())
+    params = [*model.parameters(), *(head.parameters() if head is not None else ())]
+    optimizer = torch.optim.Adam(params, lr=cfg.learning_rate)
     shuffle = torch.Generator().manual_seed(cfg.seed)
     noise = torch.Generator().manual_seed(cfg.seed + 1)
     history: list[dict[str, float]] = []
@@ -218,6 +273,8 @@ def train_vae(cfg: VaeConfig, frames: Iterable[Frame] | None = None) -> dict[str
     state = _load_checkpoint(ckpt_path, key, cfg.epochs, console)
     if state is not None:
         model.load_state_dict(state["model"])
+        if head is not None:
+            head.load_state_dict(state["head"])
         optimizer.load_state_dict(state["optimizer"])
         shuffle.set_state(state["shuffle_rng"])
         noise.set_state(state["noise_rng"])
@@ -227,21 +284,24 @@ def train_vae(cfg: VaeConfig, frames: Iterable[Frame] | None = None) -> dict[str
 
     live = Live(str(report_dir), dvcyaml=False, save_dvc_exp=False)
     for past in history:  # a fresh report that carries the resumed epochs' curves
-        for name in _EPOCH_KEYS:
+        for name in epoch_keys:
             live.log_metric(name, past[name])
         live.next_step()
 
     with _progress(console) as progress:
         for epoch in range(len(history) + 1, cfg.epochs + 1):
-            row = _train_epoch(model, optimizer, data, train_idx, cfg, shuffle, noise, progress, epoch)
-            row |= {f"val/{k}": v for k, v in evaluate(model, data, val_idx, cfg.beta, cfg.seed + 2).items()}
+            row = _train_epoch(model, optimizer, data, train_idx, cfg, shuffle, noise, progress, epoch, head, targets)
+            val = evaluate(model, data, val_idx, cfg.beta, cfg.seed + 2, head, targets, cfg.feature_weight)
+            row |= {f"val/{k}": v for k, v in val.items()}
             history.append(row)
-            for name in _EPOCH_KEYS:
+            for name in epoch_keys:
                 live.log_metric(name, row[name])
             live.next_step()
             console.log(
                 f"epoch {epoch}: train loss {row['train/loss']:.2f}, val loss {row['val/loss']:.2f} "
-                f"(recon {row['val/recon']:.2f}, KL {row['val/kl']:.2f}), {row['images_per_s']:.0f} images/s"
+                f"(recon {row['val/recon']:.2f}, KL {row['val/kl']:.2f}"
+                + (f", rise {row['val/rise']:.3f}" if head is not None else "")
+                + f"), {row['images_per_s']:.0f} images/s"
             )
             _save_checkpoint(
                 ckpt_path,
@@ -249,6 +309,7 @@ def train_vae(cfg: VaeConfig, frames: Iterable[Frame] | None = None) -> dict[str
                     "key": key,
                     "epoch": epoch,
                     "model": model.state_dict(),
+                    **({"head": head.state_dict()} if head is not None else {}),
                     "optimizer": optimizer.state_dict(),
                     "shuffle_rng": shuffle.get_state(),
                     "noise_rng": noise.get_state(),
@@ -284,7 +345,7 @@ def train_vae(cfg: VaeConfig, frames: Iterable[Frame] | None = None) -> dict[str
     live.log_image("rise_probes.png", rise_probe_figure(train_mu, train_rise, val_mu, val_rise, rise))
 
     last = history[-1]
-    metrics = {name: last[name] for name in _EPOCH_KEYS}
+    metrics = {name: last[name] for name in epoch_keys}
     metrics |= {
         "train/images_per_s": float(np.median([h["images_per_s"] for h in history])),
         "probe_accuracy": probe_accuracy,
@@ -300,7 +361,7 @@ def train_vae(cfg: VaeConfig, frames: Iterable[Frame] | None = None) -> dict[str
         "epochs": len(history),
     }
     for name, value in metrics.items():
-        if name not in _EPOCH_KEYS:
+        if name not in epoch_keys:
             live.log_metric(name, value, plot=False)
     live.end()
     move_speed(report_dir / "metrics.json", report_dir / SPEED_JSON, ("train/images_per_s",))  # results only
@@ -315,4 +376,4 @@ def train_vae(cfg: VaeConfig, frames: Iterable[Frame] | None = None) -> dict[str
     return metrics
 
 
-__all__ = ["configure_threads", "evaluate", "latent_means", "train_step", "train_vae"]
+__all__ = ["configure_threads", "evaluate", "latent_means", "objective", "train_step", "train_vae"]

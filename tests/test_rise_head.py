@@ -1,0 +1,119 @@
+"""The VAE's training-only aux head (vae.feature_weight): masked targets and loss, the plain VAE at weight 0, and a
+tiny train_vae run in which the head makes the latent carry the rise ahead linearly."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+import torch
+from test_probes import frames
+
+from hexpipe.config import ConfigError, VaeConfig, load_params
+from hexpipe.models.rise_head import RiseHead, RiseScale, rise_loss, rise_targets
+from hexpipe.models.train_vae import objective, train_step, train_vae
+from hexpipe.models.vae import ConvVAE
+from hexpipe.models.vae_data import build_dataset
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(autouse=True)
+def _outside_any_repo(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(tmp_path)  # dvclive would `dvc init` the enclosing git repo
+
+
+def test_targets_mark_what_is_undefined() -> None:
+    distance = np.array([0.5, 1.0, np.inf, np.nan], np.float32)  # rise, rise, nothing in range, unlabelled
+    height = np.array([0.05, 0.10, np.nan, np.nan], np.float32)
+    scale = RiseScale.fit(distance, height)
+    assert scale.distance_mean == pytest.approx(0.75) and scale.height_mean == pytest.approx(0.075)
+    t = rise_targets(distance, height, scale).numpy()
+    np.testing.assert_allclose(t[:2, :2], [[-1.0, -1.0], [1.0, 1.0]], atol=1e-4)
+    np.testing.assert_array_equal(t[:, 2][:3], [1.0, 1.0, 0.0])
+    assert np.isnan(t[2, :2]).all() and np.isnan(t[3]).all()
+
+
+def test_loss_masks_frames_without_a_rise() -> None:
+    """NaN targets add exactly nothing, to the loss or to the gradient: the loss over a batch with unlabelled and
+    rise-less frames is the loss over the labelled part, rescaled to the batch size."""
+    torch.manual_seed(0)
+    predicted = torch.randn(4, 3, requires_grad=True)
+    targets = torch.tensor([[0.3, -0.2, 1.0], [1.1, 0.4, 1.0], [math.nan, math.nan, 0.0], [math.nan] * 3])
+    loss = rise_loss(predicted, targets)
+    loss.backward()
+    assert torch.isfinite(loss) and torch.isfinite(predicted.grad).all()
+    assert (predicted.grad[3] == 0).all() and (predicted.grad[2, :2] == 0).all() and predicted.grad[2, 2] != 0
+    labelled = rise_loss(predicted[:2].detach(), targets[:2]) * 2
+    in_range_only = torch.nn.functional.binary_cross_entropy_with_logits(predicted[2, 2].detach(), torch.tensor(0.0))
+    assert loss.item() * 4 == pytest.approx(float(labelled + in_range_only), rel=1e-6)
+
+
+def test_weight_zero_is_exactly_the_plain_vae_loss() -> None:
+    torch.manual_seed(0)
+    model, head = ConvVAE(1, 32), RiseHead(8)
+    x = torch.rand(6, 1, 32, 32)
+    targets = torch.tensor([[0.5, 0.1, 1.0]] * 3 + [[math.nan, math.nan, 0.0]] * 3)
+    plain = objective(model, x, 0.25, torch.Generator().manual_seed(1))
+    zero = objective(model, x, 0.25, torch.Generator().manual_seed(1), head, targets, 0.0)
+    weighted = objective(model, x, 0.25, torch.Generator().manual_seed(1), head, targets, 2.0)
+    assert zero[0].item() == plain[0].item() and zero[3].item() == 0.0
+    assert weighted[0].item() == pytest.approx(plain[0].item() + 2.0 * weighted[3].item())
+    assert weighted[3].item() > 0 and torch.isfinite(weighted[0])
+
+
+def test_train_step_fits_the_head_through_the_encoder() -> None:
+    """60 steps on one batch: the rise loss (masked rows included) falls below 60% of its start, so the head's
+    gradient is applied and reaches the latent."""
+    torch.manual_seed(0)
+    data = build_dataset(frames("heightmap", episodes=2), "heightmap", 16)  # 48 frames, a third with no rise
+    targets = rise_targets(data.rise_distance, data.rise_height, RiseScale.fit(data.rise_distance, data.rise_height))
+    model, head = ConvVAE(1, 16), RiseHead(8)
+    optimizer = torch.optim.Adam([*model.parameters(), *head.parameters()], lr=3e-3)
+    noise, x = torch.Generator().manual_seed(0), data.batch(np.arange(len(data)))
+    rise = [train_step(model, optimizer, x, 0.25, noise, head, targets, 5.0)[3] for _ in range(60)]
+    assert all(math.isfinite(r) for r in rise) and np.mean(rise[-5:]) < 0.6 * np.mean(rise[:5])
+
+
+def _cfg(root: Path, name: str, **overrides: object) -> VaeConfig:
+    settings: dict[str, object] = {"image_size": 16, "batch_size": 32, "epochs": 4, "val_fraction": 0.5,
+                                   "out_dir": str(root / name / "m"), "report_dir": str(root / name / "r"),
+                                   "data_dir": str(root / "none")}
+    return VaeConfig(**(settings | overrides))
+
+
+def test_the_head_makes_the_rise_linearly_readable(tmp_path: Path) -> None:
+    """Same data, seed and epochs (6 held-out episodes): with the head, its loss falls over the epochs and the ridge
+    probes of the rise's distance and height on held-out episodes beat the plain VAE's (were the head's gradient
+    lost, the two runs would train the same encoder bit for bit). Without a head there is no rise loss."""
+    plain = train_vae(_cfg(tmp_path, "plain", feature_weight=0.0), frames("heightmap", episodes=12))
+    aux_cfg = _cfg(tmp_path, "aux", feature_weight=5.0)
+    aux = train_vae(aux_cfg, frames("heightmap", episodes=12))
+    assert "val/rise" not in plain and math.isfinite(aux["val/rise"])
+    curve = (Path(aux_cfg.report_dir) / "plots" / "metrics" / "train" / "rise.tsv").read_text().splitlines()[1:]
+    rise = [float(line.split("\t")[-1]) for line in curve]
+    assert len(rise) == 4 and rise[-1] < 0.95 * rise[0]
+    for name in ("rise_distance_r2", "rise_height_r2"):
+        assert aux[f"probe/{name}"] > plain[f"probe/{name}"], name
+    saved = json.loads((Path(aux_cfg.out_dir) / "encoder.json").read_text())
+    assert saved["latent_dim"] == 8 and "head" not in json.dumps(saved)  # the export is the plain encoder
+
+
+def test_resume_restores_the_head(tmp_path: Path) -> None:
+    """An interrupted run (2 then 3 epochs) ends where the uninterrupted one does, head and its optimiser state
+    included; a checkpoint made at another feature_weight is not resumed."""
+    whole = train_vae(_cfg(tmp_path, "whole", epochs=3, feature_weight=2.0), frames("heightmap", episodes=6))
+    train_vae(_cfg(tmp_path, "parts", epochs=2, feature_weight=2.0), frames("heightmap", episodes=6))
+    resumed = train_vae(_cfg(tmp_path, "parts", epochs=3, feature_weight=2.0), frames("heightmap", episodes=6))
+    assert resumed["val/rise"] == whole["val/rise"] and resumed["val/loss"] == whole["val/loss"]
+    other = train_vae(_cfg(tmp_path, "parts", epochs=3, feature_weight=1.0), frames("heightmap", episodes=6))
+    assert other["val/loss"] != whole["val/loss"]
+
+
+def test_config_rejects_a_negative_weight() -> None:
+    with pytest.raises(ConfigError) as err:
+        load_params(ROOT / "params.yaml", ["vae.feature_weight=-0.5"])
+    assert "vae.feature_weight" in str(err.value) and "\n" not in str(err.value)
