@@ -20,7 +20,7 @@ from pathlib import Path
 
 import pytest
 
-from hexpipe.config import ConfigError, load_params
+from hexpipe.config import ConfigError, apply_overrides, load_params
 from hexpipe.models.vae import ConvVAE, encoder_config, export_encoder
 from hexpipe.sweep.grid import expand, parse_condition
 from hexpipe.sweep.run import run_sweep
@@ -72,6 +72,10 @@ def test_grid_expands_conditions_by_seeds_and_refuses_owned_keys(tmp_path):
                                                           "sweep.conditions={a: [], b: [ppo.blind=true]}"),
                                                      "sweep.resamples=500", "sweep.cpus=7"]))
     assert [t.key for t in same] == [t.key for t in trials]  # statistics settings do not invalidate trials
+    upstream = expand(apply_overrides(params, ["vae.epochs=3", "collect.episodes=5"]))
+    assert [t.key for t in upstream] == [t.key for t in trials]  # nor do the stages before train-ppo
+    longer = expand(apply_overrides(params, ["ppo.n_steps=256"]))
+    assert not {t.key for t in longer} & {t.key for t in trials}
     assert parse_condition("x:ppo.blind=true; task.power_cost=0.1") == ("x", ("ppo.blind=true",
                                                                                "task.power_cost=0.1"))
     assert parse_condition("default") == ("default", ())

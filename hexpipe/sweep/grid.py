@@ -17,6 +17,9 @@ from hexpipe.config import ConfigError, Params, apply_overrides, parse_override
 OWNED = ("ppo.seed", "ppo.out_dir", "ppo.report_dir", "eval.policy_dir", "eval.out_dir", "eval.report_dir")
 
 
+TRIAL_SECTIONS = {"sim", "cpg", "sensors", "task", "ppo", "eval"}  # what train-ppo and evaluate read
+
+
 @dataclass(frozen=True)
 class Trial:
     condition: str
@@ -30,9 +33,11 @@ class Trial:
 
     @property
     def key(self) -> str:
-        """Hash of every param the trial runs under (the sweep's own section aside: its statistics settings and
-        --cpus do not change a trial): a stored result is reused only under the same key."""
-        dump = self.params.model_dump(mode="json", exclude={"sweep"})
+        """Hash of the params the trial reads (train-ppo's and evaluate's, as in dvc.yaml): a stored result is
+        reused only under the same key. collect, vae and the sweep's own section (statistics, --cpus) do not change
+        a trial; the encoder it loads is named by ppo.encoder_dir."""
+        dump = self.params.model_dump(mode="json", include=TRIAL_SECTIONS)
+        dump["collect"] = {"log_every": self.params.collect.log_every}  # evaluate's MCAP logging
         return hashlib.sha256(json.dumps(dump, sort_keys=True).encode()).hexdigest()[:16]
 
     @property
