@@ -230,7 +230,11 @@ def test_ctrl_c_stops_the_live_server_and_leaves_no_partial_files(tmp_path):
     cmd = [sys.executable, "-m", "hexpipe.cli", "play", "--params", str(ROOT / "params.yaml"), "--gait", GAIT,
            "--live", "--port", "0", "--mcap", str(tmp_path / "ep.mcap"), "--video", str(tmp_path / "ep.mp4")]
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    proc = subprocess.Popen(cmd, stderr=subprocess.PIPE, stdout=subprocess.PIPE, text=True, env=env)
+    # A terminal's Ctrl-C: SIGINT at its default, also when the tests run as a background job (a non-interactive
+    # shell starts those with SIGINT ignored, the child would inherit that, and Python then never raises
+    # KeyboardInterrupt).
+    proc = subprocess.Popen(cmd, stderr=subprocess.PIPE, stdout=subprocess.PIPE, text=True, env=env,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     try:
         lines = []
         for line in proc.stderr:  # blocks until it waits for a viewer (nobody connects)
