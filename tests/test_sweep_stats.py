@@ -136,6 +136,19 @@ def test_report_files_are_complete_and_metrics_hold_numbers_only(tmp_path):
         assert (tmp_path / name).stat().st_size > 0
     assert not list(tmp_path.glob(".*tmp*"))
 
+    # Pareto: success over the suite (the `all` row) against flat cost; both conditions cross flat ground, so only
+    # the suite's success can tell them apart ("bad" fails the block)
+    from hexpipe.sweep.report import plot_pareto
+
+    def cost(value):
+        return {"cost_of_transport": value, "cost_of_transport_low": value, "cost_of_transport_high": value}
+
+    report.table["bad"]["flat"] = {**report.table["good"]["flat"], **cost(0.1)}
+    report.table["good"]["flat"] = {**report.table["good"]["flat"], **cost(5.0)}
+    assert sorted(plot_pareto(report, tmp_path / "front.png")) == ["bad", "good"]  # cheaper, or more successful
+    report.table["good"]["all"] = {**report.table["bad"]["all"]}  # no longer more successful: dominated
+    assert plot_pareto(report, tmp_path / "front.png") == ["bad"]
+
     report.flat_terrain = "nowhere"  # flat ground not evaluated: no Pareto plot, a note instead
     write_report(tmp_path / "noflat", report)
     assert not (tmp_path / "noflat" / "pareto_nowhere.png").exists()

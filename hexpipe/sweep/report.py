@@ -3,8 +3,8 @@ targets_per_terrain.csv, report.md and figures, every file written atomically (m
 
 - success.png: success rate per terrain and condition (bars: mean over seeds, whiskers: bootstrap interval over
   seeds, dots: each seed);
-- pareto_<flat>.png: success against cost of transport on flat ground, one point per condition, the Pareto front
-  (more success for less energy) joined.
+- pareto_<flat>.png: success over the suite against cost of transport on flat ground, one point per
+  condition, the Pareto front (more success for less energy) joined.
 """
 
 from __future__ import annotations
@@ -84,31 +84,35 @@ def plot_success(report: SweepReport, path: Path) -> None:
 
 
 def plot_pareto(report: SweepReport, path: Path) -> list[str]:
-    """Success against cost of transport on the flat terrain; returns the conditions on the Pareto front."""
+    """Success over the whole suite (the `all` row; the flat terrain's own when it is the only one) against cost of
+    transport on the flat terrain: what a power price buys against what it costs. Returns the conditions on the
+    Pareto front."""
     from matplotlib.figure import Figure
 
     flat = report.flat_terrain
-    cells = {c: row[flat] for c, row in report.table.items() if flat in row}
-    points = {c: (cell.get("success_seed_mean", math.nan), cell.get("cost_of_transport", math.nan))
-              for c, cell in cells.items()}
+    rows = {c: row for c, row in report.table.items() if flat in row}
+    success = {c: row.get(ALL, row[flat]) for c, row in rows.items()}
+    points = {c: (success[c].get("success_seed_mean", math.nan), row[flat].get("cost_of_transport", math.nan))
+              for c, row in rows.items()}
     front = pareto_front(points)
     fig = Figure(figsize=(6, 4.2), layout="constrained")
     ax = fig.subplots()
-    for condition, cell in cells.items():
+    for condition, row in rows.items():
         y, x = points[condition]
         if not (np.isfinite(x) and np.isfinite(y)):
             continue
-        xerr = [[x - cell.get("cost_of_transport_low", x)], [cell.get("cost_of_transport_high", x) - x]]
-        yerr = [[y - cell.get("success_seed_mean_low", y)], [cell.get("success_seed_mean_high", y) - y]]
+        cost, hit = row[flat], success[condition]
+        xerr = [[x - cost.get("cost_of_transport_low", x)], [cost.get("cost_of_transport_high", x) - x]]
+        yerr = [[y - hit.get("success_seed_mean_low", y)], [hit.get("success_seed_mean_high", y) - y]]
         ax.errorbar(x, y, xerr=xerr, yerr=yerr, fmt="o", capsize=3, label=condition)
         ax.annotate(condition, (x, y), textcoords="offset points", xytext=(5, 5), fontsize=8)
     if len(front) > 1:
         ordered = sorted(front, key=lambda c: points[c][1])
         ax.plot([points[c][1] for c in ordered], [points[c][0] for c in ordered], "k--", lw=1, label="Pareto front")
     ax.margins(0.15)
-    ax.set_xlabel("cost of transport (episodes that reach the goal)")
-    ax.set_ylabel("success rate (mean over seeds)")
-    ax.set_title(f"{flat}: more success for less energy is up and to the left ({report.confidence:.0%} intervals)",
+    ax.set_xlabel(f"cost of transport on {flat} (episodes that reach the goal)")
+    ax.set_ylabel("success rate over the suite (mean over seeds)")
+    ax.set_title(f"more success for less energy is up and to the left ({report.confidence:.0%} intervals)",
                  fontsize=9)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
@@ -254,8 +258,9 @@ def markdown(report: SweepReport, front: list[str] | None) -> str:
             + _table(("a > b", "terrain", "probability"), improvement))
     figures = ["![success per terrain](success.png)"]
     if front is not None:
-        figures.append(f"![success against cost of transport on {report.flat_terrain}](pareto_{report.flat_terrain}"
-                       f".png)\n\nOn the Pareto front ({report.flat_terrain}): {', '.join(front) or 'none'}.")
+        figures.append(f"![success over the suite against cost of transport on {report.flat_terrain}](pareto_"
+                       f"{report.flat_terrain}.png)\n\nOn the Pareto front (success over the suite, cost of "
+                       f"transport on {report.flat_terrain}): {', '.join(front) or 'none'}.")
     parts.append("## Figures\n\n" + "\n\n".join(figures))
     parts.append("## Trials\n\n" + _table(("trial", "status", "seconds", "host", "error"), trials)
                  + "\n\nPer-trial reports: `TRIAL/ppo/` and `TRIAL/eval/` beside this file.")
