@@ -176,6 +176,22 @@ def test_reward_is_the_papers_unless_power_costs_something():
     assert rewards[0.1][0] < rewards[0.1][1]
 
 
+def test_giving_up_costs_the_failure_penalty_once_and_reaching_the_goal_costs_nothing():
+    ends = {}
+    for terrain, gait in (("single_block", LOW_GAIT), ("flat", None)):  # the low gait sticks at the block face
+        env = HexapodEnv(terrain, initial_cpg=gait, task=TaskConfig(sensors=(), failure_penalty=500.0))
+        env.reset(seed=0)
+        failure, done = [], False
+        while not done:
+            _, reward, terminated, truncated, info = env.step(np.zeros(3))
+            failure.append(info["reward_terms"]["failure"])
+            done = terminated or truncated
+        assert reward == pytest.approx(sum(info["reward_terms"].values()))
+        ends[terrain] = (info["termination"], failure[-1], any(failure[:-1]))
+        env.close()
+    assert ends == {"single_block": ("stuck", -500.0, False), "flat": ("goal", 0.0, False)}
+
+
 def test_a_high_gait_costs_more_energy_per_metre_on_flat():
     """Why the power cost makes lifting a choice: on open ground the high gait only spends more."""
     from hexpipe.envs.rewards import cost_of_transport

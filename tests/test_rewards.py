@@ -19,3 +19,11 @@ def test_power_penalty_is_linear_in_watts_and_free_at_zero_cost():
 def test_cost_of_transport_is_energy_per_weight_and_distance():
     assert cost_of_transport(20.0 * GRAVITY * 3.0, 20.0, 3.0) == pytest.approx(1.0)
     assert cost_of_transport(100.0, 20.0, 0.0) > 0  # no division by zero when the robot never moved
+
+
+def test_failure_penalty_applies_to_giving_up_only():
+    from hexpipe.envs.rewards import failure_penalty
+
+    ends = ("stuck", "fall", "goal", None, "nonfinite")
+    assert [failure_penalty(t, 300.0) for t in ends] == [-300.0, -300.0, 0, 0, 0]
+    assert failure_penalty("stuck", 0.0) == 0.0  # the default: the paper's reward

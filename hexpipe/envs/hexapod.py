@@ -11,7 +11,8 @@ Observation (Dict):
   flags then normal forces (N).
 Action: Box [-1, 1]^3, scaled by `CpgConfig.accel_limit` to d^2/dt^2 (a, b, omega).
 Reward: `reward_scale` * forward velocity (m/s, displacement over the control step), as in the paper, minus
-`power_cost` * mean mechanical joint power (W) when that is set (0 is the paper's reward).
+`power_cost` * mean mechanical joint power (W) when that is set (0 is the paper's reward), minus `failure_penalty`
+once when the episode ends stuck or fallen (0 by default).
 Terminates on `goal` (3 m forward), `stuck` (too little progress over a window), `fall` (tilt or base too low)
 or `nonfinite` physics; truncates at the time limit. `info` carries distance, success, termination and the
 reward terms.
@@ -31,7 +32,7 @@ from gymnasium import spaces
 
 from hexpipe import sensors as registry
 from hexpipe.config import CpgConfig, Params, SensorConfig, SimConfig, TaskConfig
-from hexpipe.envs.rewards import forward_velocity_reward, power_penalty
+from hexpipe.envs.rewards import failure_penalty, forward_velocity_reward, power_penalty
 from hexpipe.envs.state import WORLD_FRAME, EnvScene, EnvState
 from hexpipe.sensors.heightmap import HEADING_FRAME, quat_to_yaw
 from hexpipe.sim.cpg import CPG
@@ -208,18 +209,20 @@ class HexapodEnv(gym.Env):
         if not math.isfinite(power):
             power = 0.0
         self.energy += power * self.control_dt
-        terms = self._reward_terms(dx, power)
+        terms = self._reward_terms(dx, power, termination)
         reward = sum(terms.values())
         truncated = termination is None and self.steps >= self.max_steps
         obs = self._observation() if termination != "nonfinite" else self._zero_observation()
         self.last_info = self._info(pos, terms, termination, power)
         return obs, reward, termination is not None, truncated, self.last_info
 
-    def _reward_terms(self, dx: float, power: float) -> dict[str, float]:
-        """The named reward terms of one control step: dx (m forward), power (W, mean mechanical joint power)."""
+    def _reward_terms(self, dx: float, power: float, termination: str | None = None) -> dict[str, float]:
+        """The named reward terms of one control step: dx (m forward), power (W, mean mechanical joint power), and
+        how the step ended the episode, if it did."""
         return {
             "forward": forward_velocity_reward(dx, self.control_dt, self.task.reward_scale),
             "power": power_penalty(power, self.task.power_cost),
+            "failure": failure_penalty(termination, self.task.failure_penalty),
         }
 
     def _termination(self, pos: np.ndarray, quat: np.ndarray) -> str | None:

@@ -19,6 +19,19 @@ def power_penalty(power_w: float, cost: float) -> float:
     return -cost * power_w
 
 
+FAILURES = ("stuck", "fall")  # terminations that are the gait's fault; the goal and the time limit are not
+
+
+def failure_penalty(termination: str | None, penalty: float) -> float:
+    """Minus `penalty` reward once, on the step that ends the episode stuck or fallen; 0 on every other step.
+
+    With a power price, reward near a block can turn negative (slow progress, high power): a policy then gains by
+    ending the episode against the face, since "stuck" stops the costs. The penalty makes giving up cost more than
+    a slow, expensive climb.
+    """
+    return -penalty if termination in FAILURES else 0.0
+
+
 def cost_of_transport(energy_j: float, mass_kg: float, distance_m: float) -> float:
     """Dimensionless cost of transport E / (m g d): the energy spent per unit weight and distance travelled."""
     return energy_j / (mass_kg * GRAVITY * max(distance_m, 1e-3))

@@ -19,7 +19,7 @@ class EpisodeStats(BaseCallback):
 
     Logged against timesteps to dvclive (`episode/*`, `train/*` losses, `time/steps_per_s`): the paper's figure 6
     (episode reward against time) as a DVC plot, plus success rate and distance, and one curve per reward term
-    (`episode/reward_<term>`, the env's `info["reward_terms"]` summed over the episode: forward, power).
+    (`episode/reward_<term>`, the env's `info["reward_terms"]` summed over the episode: forward, power, failure).
     """
 
     def __init__(self, live: Any | None = None, window: int = 20, log_path: Path | None = None,
