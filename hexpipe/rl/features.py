@@ -4,10 +4,12 @@ Two pieces, one per process:
 
 * `TerrainEmbedding` (a gymnasium wrapper, in each env's worker process) replaces the sensor frame with the frozen
   encoder's 8-d posterior mean. Encoding then runs in parallel across the workers, beside their physics, and only
-  the embedding crosses the pipe to the learner (issue 12: encoding in the learner, between synchronous env steps,
-  cost about a quarter of train-ppo's wall time).
+  the embedding crosses the pipe to the learner. Issue 12 moved it here from the learner, where it ran between
+  synchronous env steps (about a quarter of train-ppo's time in a profile); the A/B in reports/bench/ppo_speedup.json,
+  measured with more busy processes than cores, found the move 15% slower, so the gain depends on idle cores.
 * `TerrainFeatures` (a VecEnv wrapper, in the learner) lays the Dict out as one float32 vector
-  [body, cpg, embedding], so PPO stores 27 numbers per step and never re-encodes in its update epochs.
+  [body, cpg, embedding], so PPO stores 25 numbers per step (27 with task.observe_position) and never re-encodes
+  in its update epochs.
 
 `feature_vector` is that layout for one raw observation: what a loaded policy computes at run time.
 """
