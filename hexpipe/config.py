@@ -176,7 +176,7 @@ class TaskConfig(_Section):
     # minus this much reward per W of joint power, so lifting has a price (issue 10); 0 = the paper's reward
     power_cost: Annotated[float, Field(ge=0)] = 0.05
     # minus this much reward once when an episode ends stuck or fallen: with a high power price, giving up at the
-    # block face otherwise pays better than a slow, costly climb (reports/experiments/failure_penalty)
+    # block face otherwise pays better than a slow, costly climb (reports/sweeps/penalty)
     failure_penalty: Annotated[float, Field(ge=0)] = 0.0
     # the observation's `body` starts with x, y relative to the start (the paper's state); false drops them, so the
     # policy must find the block with its terrain sensor instead of memorising where it was (body: 13 -> 11 numbers)

@@ -51,6 +51,7 @@ def test_overrides_are_typed_and_nested():
         ("ppo.train_terrains=[flat, rough, stairs]", "train_terrains has 3 terrains but n_envs=2"),
         ("ppo.train_terrains=[]", "train_terrains is empty"),
         ("task.power_cost=-0.1", "task.power_cost"),
+        ("task.failure_penalty=-5", "task.failure_penalty"),
     ],
 )
 def test_bad_overrides_name_the_key(override, expected):
