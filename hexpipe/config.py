@@ -173,11 +173,12 @@ class TaskConfig(_Section):
     fall_height: PositiveFloat = 0.07  # base height above the terrain below which the robot has fallen (m)
     fall_tilt: Annotated[float, Field(gt=0, le=math.pi)] = 1.0  # |roll| or |pitch| beyond this is a fall (rad)
     reward_scale: PositiveFloat = 100.0  # reward = reward_scale * forward velocity (m/s), as in the paper
-    # minus this much reward per W of joint power, so lifting has a price (issue 10); 0 = the paper's reward
-    power_cost: Annotated[float, Field(ge=0)] = 0.05
+    # minus this much reward per W of joint power, so lifting has a price (issue 10); 0 = the paper's reward.
+    # 0.2 with the failure penalty: the price sweep's choice (reports/sweeps/penalty, reports/sweeps/price)
+    power_cost: Annotated[float, Field(ge=0)] = 0.2
     # minus this much reward once when an episode ends stuck or fallen: with a high power price, giving up at the
-    # block face otherwise pays better than a slow, costly climb (reports/sweeps/penalty)
-    failure_penalty: Annotated[float, Field(ge=0)] = 0.0
+    # block face otherwise pays better than a slow, costly climb (reports/experiments/README.md, "price"); 0 = off
+    failure_penalty: Annotated[float, Field(ge=0)] = 1000.0
     # the observation's `body` starts with x, y relative to the start (the paper's state); false drops them, so the
     # policy must find the block with its terrain sensor instead of memorising where it was (body: 13 -> 11 numbers)
     observe_position: bool = False

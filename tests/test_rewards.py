@@ -26,4 +26,4 @@ def test_failure_penalty_applies_to_giving_up_only():
 
     ends = ("stuck", "fall", "goal", None, "nonfinite")
     assert [failure_penalty(t, 300.0) for t in ends] == [-300.0, -300.0, 0, 0, 0]
-    assert failure_penalty("stuck", 0.0) == 0.0  # the default: the paper's reward
+    assert failure_penalty("stuck", 0.0) == 0.0  # 0: no penalty, the paper's reward
