@@ -39,7 +39,9 @@ print(json.dumps({k: metrics[k] for k in ("time/train_steps_per_s", "time/bare_e
 def run_tree(tree: Path, overrides: list[str]) -> dict[str, float]:
     env = {**os.environ, "PYTHONPATH": str(tree)}
     done = subprocess.run([sys.executable, "-c", TRAINER, str(tree / "params.yaml"), json.dumps(overrides)],
-                          cwd=tree, env=env, check=True, capture_output=True, text=True)
+                          cwd=tree, env=env, capture_output=True, text=True)
+    if done.returncode:
+        raise SystemExit(f"ppo_speedup: training in {tree} failed:\n{done.stderr[-3000:]}")
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
@@ -48,7 +50,8 @@ def main() -> None:
     parser.add_argument("--old", default="f3adb97")
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--steps", type=int, default=12288)
-    parser.add_argument("--encoder-dir", default=str(ROOT / "data/models/vae"))
+    parser.add_argument("--encoder-dir", type=lambda p: str(Path(p).resolve()), default=str(ROOT / "data/models/vae"),
+                        help="read by both trees, each running in its own folder: resolved to an absolute path")
     parser.add_argument("--set", dest="overrides", action="append", default=[])
     parser.add_argument("--out", default=str(ROOT / "reports/bench/ppo_speedup.json"))
     args = parser.parse_args()
