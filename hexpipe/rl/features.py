@@ -5,8 +5,10 @@ Two pieces, one per process:
 * `TerrainEmbedding` (a gymnasium wrapper, in each env's worker process) replaces the sensor frame with the frozen
   encoder's 8-d posterior mean. Encoding then runs in parallel across the workers, beside their physics, and only
   the embedding crosses the pipe to the learner. Issue 12 moved it here from the learner, where it ran between
-  synchronous env steps (about a quarter of train-ppo's time in a profile); the A/B in reports/bench/ppo_speedup.json,
-  measured with more busy processes than cores, found the move 15% slower, so the gain depends on idle cores.
+  synchronous env steps (about a quarter of train-ppo's time in a profile). Measured by benchmarks/ppo_speedup.py,
+  the move gains nothing on 2 cores: 1.00x idle (reports/bench/ppo_speedup_idle.json) and 0.85x with more busy
+  processes than cores (reports/bench/ppo_speedup.json), since the 2 workers and the learner leave no core idle.
+  It pays where cores are spare (a sweep node).
 * `TerrainFeatures` (a VecEnv wrapper, in the learner) lays the Dict out as one float32 vector
   [body, cpg, embedding], so PPO stores 25 numbers per step (27 with task.observe_position) and never re-encodes
   in its update epochs.
@@ -53,19 +55,31 @@ class TerrainEmbedding(gym.ObservationWrapper):
         self.observation_space = spaces.Dict({**kept, EMBEDDING: latent})
 
     def observation(self, observation: dict[str, Any]) -> dict[str, Any]:
-        frame = np.asarray(observation[self.encoder.modality]).reshape(1, *self.frame_shape)
         out = {k: v for k, v in observation.items() if k != self.encoder.modality}
-        out[EMBEDDING] = self.encoder.encode(frame)[0].astype(np.float32)
+        out[EMBEDDING] = embed(observation, self.encoder, self.frame_shape)
         return out
+
+
+def embed(obs: dict[str, Any], encoder: Encoder, frame_shape: tuple[int, ...] | None) -> np.ndarray:
+    """The encoder's (latent_dim,) float32 embedding of one observation's sensor frame, reshaped to frame_shape
+    (None: as observed)."""
+    frame = np.asarray(obs[encoder.modality])
+    return encoder.encode(frame.reshape(1, *(frame_shape or frame.shape)))[0].astype(np.float32)
+
+
+def lay_out(obs: dict[str, Any], keys: tuple[str, ...]) -> np.ndarray:
+    """Batched observations (a leading env axis on every value) -> (n, dim) float32, `keys` in order."""
+    n = len(obs[keys[0]])
+    return np.concatenate([np.asarray(obs[k], dtype=np.float32).reshape(n, -1) for k in keys], axis=1)
 
 
 def feature_vector(obs: dict[str, Any], encoder: Encoder | None, frame_shape: tuple[int, ...] | None) -> np.ndarray:
     """One raw observation -> (1, dim) float32 [body, cpg, embedding], exactly as training lays it out."""
-    parts = [np.asarray(obs[k], dtype=np.float32).reshape(1, -1) for k in PROPRIOCEPTIVE_KEYS]
-    if encoder is not None:
-        frame = np.asarray(obs[encoder.modality]).reshape(1, *(frame_shape or np.shape(obs[encoder.modality])))
-        parts.append(encoder.encode(frame).astype(np.float32).reshape(1, -1))
-    return np.concatenate(parts, axis=1)
+    if encoder is None:
+        return lay_out({k: np.asarray(obs[k])[None] for k in PROPRIOCEPTIVE_KEYS}, PROPRIOCEPTIVE_KEYS)
+    keys = (*PROPRIOCEPTIVE_KEYS, EMBEDDING)
+    embedded = {**obs, EMBEDDING: embed(obs, encoder, frame_shape)}
+    return lay_out({k: np.asarray(embedded[k])[None] for k in keys}, keys)
 
 
 class TerrainFeatures(VecEnvWrapper):
@@ -83,8 +97,7 @@ class TerrainFeatures(VecEnvWrapper):
 
     def features(self, obs: dict[str, np.ndarray]) -> np.ndarray:
         """Batched: every value has a leading env axis."""
-        n = len(obs[self.keys[0]])
-        return np.concatenate([np.asarray(obs[k], dtype=np.float32).reshape(n, -1) for k in self.keys], axis=1)
+        return lay_out(obs, self.keys)
 
     def reset(self) -> np.ndarray:
         return self.features(self.venv.reset())
