@@ -1,6 +1,7 @@
 """The evaluate stage: a tiny real policy through the whole suite, and one-line errors before any episode runs."""
 
 import json
+import math
 import re
 from pathlib import Path
 
@@ -11,9 +12,11 @@ from stable_baselines3.common.vec_env import DummyVecEnv
 
 from hexpipe.config import Params, load_params
 from hexpipe.envs.hexapod import HexapodEnv
-from hexpipe.evaluation.episodes import TRACE_COLUMNS, lift_before_and_away
-from hexpipe.evaluation.metrics import rank_gaits
+from hexpipe.evaluation.controllers import ControllerSpec
+from hexpipe.evaluation.episodes import TRACE_COLUMNS, EpisodeJob, legs_at_faces, lift_before_and_away, run_episode
+from hexpipe.evaluation.metrics import rank_gaits, stall_counts
 from hexpipe.evaluation.run import GRID_SEEDS, evaluate
+from hexpipe.evaluation.suite import load_scenarios
 from hexpipe.evaluation.video import count_frames
 from hexpipe.models.vae import ConvVAE, encoder_config, export_encoder
 from hexpipe.recording.reader import count_messages, read_metadata
@@ -84,7 +87,10 @@ def test_evaluate_writes_metrics_report_recordings_and_video(blind):
     assert set(evaluated.groupby("controller")["seed"].apply(tuple)) == {(1000, 1001, 1000, 1001)}  # same seeds
     assert set(rows.loc[rows["controller"] == "grid", "seed"]).isdisjoint({1000, 1001})
 
+    assert evaluated["stall_legs"].isna().all()  # a 2 s limit: nothing ends stuck or fallen
+
     text = (report / "report.md").read_text()
+    assert "## Where the failed episodes stopped\n\nFor every" in text and "Every episode reached the goal" in text
     assert "ppo-blind from" in text and "hexpipe evaluate" in text and "a=0.30 b=0.30 omega=1.50pi" in text
     assert "fails on a wider block" not in text  # claims only for the terrains evaluated
     assert "crosses the block it was trained on" in text
@@ -170,6 +176,43 @@ def test_gait_ranking_breaks_ties_by_distance_up_to_the_goal_then_speed():
         {"gait": "stuck", "success": False, "distance": 0.5, "time": 6.0, "termination": "stuck"},
     ]).assign(cost_of_transport=2.0)
     assert rank_gaits(rows, goal_distance=3.0)["gait"].tolist() == ["fast", "overshoot", "far", "stuck"]
+
+
+@pytest.mark.parametrize(("gait", "termination", "legs"), [((0.25, 0.15, 1.5 * math.pi), "stuck", "front"),
+                                                            ((0.25, 0.40, 1.5 * math.pi), "goal", "")])
+def test_a_low_gait_stops_with_its_front_feet_at_the_face(gait, termination, legs):
+    """The physical premise, read by evaluate: b = 0.15 stalls at the block's face, front feet first; b = 0.40
+    crosses, and an episode that arrives names no legs."""
+    params = load_params(ROOT / "params.yaml")
+    scenario = load_scenarios(["single_block"])[0]
+    row = run_episode(params, EpisodeJob(scenario, ControllerSpec("fixed", gait=gait), 0, 1000)).row
+    assert (row["termination"], row["stall_legs"]) == (termination, legs)
+
+
+def test_legs_at_faces_names_the_legs_a_face_stops():
+    groups = ["front", "front", "middle", "middle", "hind", "hind"]
+    faces = [1.0, 2.0]
+    hind_at_first = np.array([1.85, 1.80, 1.45, 1.50, 0.98, 1.01])  # body past the face: a hind foot meets it
+    assert legs_at_faces(hind_at_first, groups, faces) == "hind"
+    both = np.array([1.93, 2.02, 1.45, 1.50, 0.93, 1.10])  # 7 cm before one face, 2 cm onto the other
+    assert legs_at_faces(both, groups, faces) == "front+hind"
+    assert legs_at_faces(np.array([0.5, 0.6, 0.1, 0.1, -0.4, -0.4]), groups, faces) == "none"  # nowhere near
+    assert legs_at_faces(np.array([0.91, 0.9, 0.5, 0.5, 0.0, 0.0]), groups, faces) == "none"  # 9 cm short
+
+
+def test_stall_counts_group_failed_episodes_in_the_given_order():
+    rows = pd.DataFrame([
+        {"terrain": "wide_block", "controller": "policy", "termination": "stuck", "stall_legs": "hind"},
+        {"terrain": "wide_block", "controller": "policy", "termination": "fall", "stall_legs": "hind"},
+        {"terrain": "wide_block", "controller": "policy", "termination": "stuck", "stall_legs": "front"},
+        {"terrain": "wide_block", "controller": "policy", "termination": "goal", "stall_legs": None},
+        {"terrain": "single_block", "controller": "open_loop", "termination": "stuck", "stall_legs": "front"},
+        {"terrain": "single_block", "controller": "grid", "termination": "stuck", "stall_legs": "front"},
+    ])
+    order = {"terrain": ["single_block", "wide_block"], "controller": ["policy", "open_loop"]}
+    assert stall_counts(rows, order) == [(("single_block", "open_loop"), 1, "front 1"),
+                                         (("wide_block", "policy"), 3, "hind 2, front 1")]
+    assert stall_counts(rows.drop(columns="stall_legs"), order)[1] == (("wide_block", "policy"), 3, "- 3")
 
 
 def test_lift_is_split_between_the_last_30_cm_before_a_face_and_open_ground():

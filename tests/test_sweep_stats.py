@@ -75,6 +75,8 @@ def _records():
                     ok = i < round(rate[seed] * 4)
                     episodes.append({"terrain": terrain, "controller": "policy", "episode": i, "seed": 1000 + i,
                                      "success": ok, "time": 10.0 + seed if ok else 40.0,
+                                     "termination": "goal" if ok else "stuck",
+                                     "stall_legs": None if ok else "hind" if condition == "good" else "front",
                                      "cost_of_transport": (1.0 if condition == "good" else 2.0) if ok else None})
                 episodes.append({"terrain": terrain, "controller": "open_loop", "episode": 0, "seed": 1000,
                                  "success": False, "time": 5.0, "cost_of_transport": None})
@@ -132,6 +134,10 @@ def test_report_files_are_complete_and_metrics_hold_numbers_only(tmp_path):
     assert "good > bad" in text and "pareto_flat.png" in text and "Wilson" in text
     assert "| block | bad | 0.08 [0.01, 0.35] |" in text  # Wilson for 1 of 12
     assert "| 12.0 (1 seed) |" in text  # one seed of `bad` reached the goal on the block: no interval
+    stalls = text.split("## Where the policies' failed episodes stopped")[1].split("##")[0]
+    assert [line for line in stalls.splitlines() if line.startswith("| `")] == [
+        "| `flat` | `good` | 1 | hind 1 |", "| `flat` | `bad` | 7 | front 7 |", "| `block` | `good` | 5 | hind 5 |",
+        "| `block` | `bad` | 11 | front 11 |"]
     for name in ("success.png", "pareto_flat.png", "episodes.csv", "per_seed.csv", "trials.csv"):
         assert (tmp_path / name).stat().st_size > 0
     assert not list(tmp_path.glob(".*tmp*"))

@@ -27,6 +27,11 @@ TRACE_COLUMNS = ("time", "distance", "a", "b", "omega")  # s, m, rad, rad, rad/s
 # start lifting early) and NEAR_AFTER past its end (the rear legs are still on it).
 BEFORE_FACE = 0.3
 NEAR_BEFORE, NEAR_AFTER = 1.0, 0.5
+# A foot "at a face" when an episode ends stuck or fallen: its centre at most FOOT_BEFORE_FACE before a block's face
+# (the foot's sphere is 0.02 m) or FOOT_ON_EDGE past it (caught on the edge). Which legs they are tells a front leg
+# that never lifted from a hind leg that meets a face the body has long passed.
+FOOT_BEFORE_FACE, FOOT_ON_EDGE = 0.08, 0.03
+LEG_GROUPS = ("front", "middle", "hind")
 
 
 @dataclass(frozen=True)
@@ -48,17 +53,38 @@ class EpisodeResult:
     feet: np.ndarray | None = None  # (steps + 1, legs) bool foot contact (episode 0 only): the gait diagram's data
 
 
-def _obstacles(env: HexapodEnv) -> list[tuple[float, float]]:
-    """Forward extents (m, from the start) of every box and height field of the realised terrain."""
+def _box_spans(env: HexapodEnv) -> list[tuple[float, float]]:
+    """Forward extents (m, from the start) of every box (block, step) of the realised terrain."""
     x0 = float(env.start_xy[0])
     spans = []
     for box in env.terrain.boxes:
         half = 0.5 * (abs(math.cos(box.yaw)) * box.size[0] + abs(math.sin(box.yaw)) * box.size[1])
         spans.append((box.center[0] - half - x0, box.center[0] + half - x0))
-    for hf in env.terrain.heightfields:
-        (lo, hi), _ = hf.extent
-        spans.append((lo - x0, hi - x0))
     return spans
+
+
+def _obstacles(env: HexapodEnv) -> list[tuple[float, float]]:
+    """Forward extents (m, from the start) of every box and height field of the realised terrain."""
+    x0 = float(env.start_xy[0])
+    return _box_spans(env) + [(hf.extent[0][0] - x0, hf.extent[0][1] - x0) for hf in env.terrain.heightfields]
+
+
+def legs_at_faces(foot_x: np.ndarray, groups: list[str], faces: list[float]) -> str:
+    """The leg groups (front, middle, hind, joined by '+') with a foot at a face (see FOOT_BEFORE_FACE), or 'none'.
+
+    foot_x: each foot's forward position (m, from the start); groups: each leg's group; faces: block faces (m)."""
+    at = {g for x, g in zip(foot_x, groups, strict=True)
+          if any(f - FOOT_BEFORE_FACE <= x <= f + FOOT_ON_EDGE for f in faces)}
+    return "+".join(g for g in LEG_GROUPS if g in at) or "none"
+
+
+def _stall_legs(env: HexapodEnv, termination: str | None) -> str:
+    """For an episode that ended stuck or fallen, which legs stood at a block face ('' otherwise)."""
+    if termination not in ("stuck", "fall"):
+        return ""
+    foot_x = env.robot.foot_positions()[:, 0] - float(env.start_xy[0])
+    faces = [lo for lo, _ in _box_spans(env)]
+    return legs_at_faces(foot_x, [leg.group for leg in env.robot_spec.legs], faces)
 
 
 def lift_before_and_away(trace: np.ndarray, obstacles: list[tuple[float, float]]) -> tuple[float, float]:
@@ -135,6 +161,7 @@ def run_episode(params: Params, job: EpisodeJob, on_step: StepHook | None = None
                 if ended:
                     break
         obstacles = _obstacles(env)
+        stall_legs = _stall_legs(env, info["termination"])
         mass = env.robot_spec.total_mass
     finally:
         env.close()
@@ -150,6 +177,7 @@ def run_episode(params: Params, job: EpisodeJob, on_step: StepHook | None = None
         **{f"{k}_mean": float(cpg[:, i].mean()) for i, k in enumerate(TRACE_COLUMNS) if i >= 2},
         **{f"{k}_max": float(cpg[:, i].max()) for i, k in enumerate(TRACE_COLUMNS) if i >= 2},
         "b_before_block": b_before, "b_open": b_open,
+        "stall_legs": stall_legs,  # stuck or fallen: the legs with a foot at a block face (see legs_at_faces)
         "energy_j": float(info["energy"]),
         "cost_of_transport": cost_of_transport(float(info["energy"]), mass, float(info["distance"])),
         "wall_s": time.perf_counter() - start,

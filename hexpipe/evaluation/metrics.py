@@ -199,3 +199,21 @@ def summary_numbers(table: Table, terrains: Sequence[str], learned: Sequence[str
             out |= {f"verdict/{name}/{v.terrain}": int(v.beats) for v in calls}
         out |= {f"adaptation/{name}/{k}": v for k, v in adaptation(table, name).items()}
     return out
+
+
+def stall_counts(rows: pd.DataFrame, order: dict[str, Sequence[str]]) -> list[tuple[tuple[str, ...], int, str]]:
+    """The episodes that ended stuck or fallen, by the legs that stood at a block face (results.csv's `stall_legs`).
+
+    One entry per combination of the `order` columns (e.g. terrain, then controller) that had any, in the order
+    their values are given: (key, episodes, "hind 3, front 1"). Rows recorded before `stall_legs` existed count
+    as "-"."""
+    ended = rows[rows["termination"].isin(["stuck", "fall"])]
+    for column, values in order.items():
+        ended = ended[ended[column].isin(values)]
+    lines = []
+    for key, mine in ended.groupby(list(order), sort=False):
+        legs = mine["stall_legs"].fillna("-") if "stall_legs" in mine else pd.Series("-", index=mine.index)
+        counts = sorted(legs.value_counts().items(), key=lambda kv: (-kv[1], kv[0]))
+        rank = tuple(list(order[c]).index(k) for c, k in zip(order, key, strict=True))
+        lines.append((rank, tuple(map(str, key)), len(mine), ", ".join(f"{name} {n}" for name, n in counts)))
+    return [line[1:] for line in sorted(lines)]

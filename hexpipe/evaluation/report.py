@@ -17,13 +17,22 @@ import numpy as np
 import pandas as pd
 
 from hexpipe.atomic import atomic_path, write_text
-from hexpipe.evaluation.episodes import BEFORE_FACE, NEAR_AFTER, NEAR_BEFORE, TRACE_COLUMNS, EpisodeResult
+from hexpipe.evaluation.episodes import (
+    BEFORE_FACE,
+    FOOT_BEFORE_FACE,
+    FOOT_ON_EDGE,
+    NEAR_AFTER,
+    NEAR_BEFORE,
+    TRACE_COLUMNS,
+    EpisodeResult,
+)
 from hexpipe.evaluation.metrics import (
     ADAPTATION_TARGET,
     ANYWHERE,
     SUCCESS_MARGIN,
     Table,
     adaptation,
+    stall_counts,
     summary_numbers,
     verdict,
 )
@@ -251,6 +260,15 @@ def grid_table(grid: pd.DataFrame) -> str:
     return _markdown_table(header, rows)
 
 
+def stall_table(rows: pd.DataFrame, order: dict[str, Sequence[str]]) -> str:
+    """Markdown of `stall_counts`: one line per terrain and controller (say) with stuck or fallen episodes."""
+    lines = stall_counts(rows, order)
+    if not lines:
+        return "Every episode reached the goal or the time limit."
+    return _markdown_table((*order, "stuck or fallen", "legs with a foot at a block face"),
+                           [(*(f"`{k}`" for k in key), str(n), legs) for key, n, legs in lines])
+
+
 def verdict_section(table: Table, inputs: ReportInputs) -> str:
     """How to read the verdict, then one table and the adaptation measures per learned controller."""
     parts = [
@@ -265,7 +283,7 @@ def verdict_section(table: Table, inputs: ReportInputs) -> str:
     return "\n\n".join(parts)
 
 
-def markdown(table: Table, inputs: ReportInputs) -> str:
+def markdown(table: Table, inputs: ReportInputs, rows: pd.DataFrame) -> str:
     terrains, controllers = inputs.terrains, inputs.controllers
     figures = ["![success rate](success.png)"] + [
         f"![CPG parameters on {t}](cpg_{t}.png)" for t in terrains if t in inputs.first_policy_episodes
@@ -289,6 +307,11 @@ def markdown(table: Table, inputs: ReportInputs) -> str:
         f"{NEAR_BEFORE} m before a block or {NEAR_AFTER} m past it); an adaptive gait lifts before blocks only, a "
         "fixed gait has the same b in both.",
         "## Verdict: does the learned policy beat the best fixed gait?\n\n" + verdict_section(table, inputs),
+        "## Where the failed episodes stopped\n\nFor every episode that ended stuck or fallen, the legs with a foot "
+        f"at a block's face when it ended (its centre at most {FOOT_BEFORE_FACE} m before the face or "
+        f"{FOOT_ON_EDGE} m onto it; `none`: no foot at a face, as on rough ground). `front`: the robot met the "
+        "face and did not lift over it; `hind`: the body had passed the face and a hind leg had not.\n\n"
+        + stall_table(rows, {"terrain": terrains, "controller": controllers}),
         "## The paper's claims and ours\n\nThe policy \"crosses\" a terrain when at least "
         f"{CROSSES:.0%} of its episodes reach the goal.\n\n" + claims_table(table, terrains),
         f"## Best fixed gait\n\n`best_fixed` = **{inputs.best_gait}** (zero action: the CPG holds it), the best of "
@@ -329,7 +352,7 @@ def write_reports(report_dir: Path, rows: pd.DataFrame, table: Table, inputs: Re
         if _has_feet(result):
             plot_gait(result, report_dir / f"gait_{terrain}.png")
             written.append(report_dir / f"gait_{terrain}.png")
-    write_text(report_dir / "report.md", markdown(table, inputs))
+    write_text(report_dir / "report.md", markdown(table, inputs, rows))
     learned = [c for c in LEARNED if c in inputs.controllers]
     metrics = {**table, **summary_numbers(table, inputs.terrains, learned)}  # terrains keep the suite's order
     write_text(report_dir / "metrics.json", json.dumps(metrics, indent=2) + "\n")

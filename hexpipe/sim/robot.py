@@ -30,6 +30,12 @@ class LegMount:
     radius: float  # distance of the hip yaw axis from the base centre (m)
     tripod: int  # 0 or 1: legs of one tripod swing together
 
+    @property
+    def group(self) -> str:
+        """`front`, `middle` or `hind`, from the mount direction (the middle pair points sideways)."""
+        ahead = math.cos(self.angle)
+        return "front" if ahead > 0.5 else "hind" if ahead < -0.5 else "middle"
+
 
 def _daisy_legs() -> tuple[LegMount, ...]:
     deg = math.radians
@@ -255,6 +261,14 @@ class Robot:
         """Sum over the 18 joints of |torque * velocity| (W): what the actuators spend, braking counted as cost."""
         states = self._p.getJointStates(self.body, self.joints, physicsClientId=self.client)
         return float(sum([abs(s[1] * s[3]) for s in states]))  # a list is faster than a generator here
+
+    def foot_positions(self) -> np.ndarray:
+        """(legs, 3) world position (m) of each foot's centre: the lower link's far end, where its sphere sits."""
+        states = self._p.getLinkStates(self.body, self.foot_links, physicsClientId=self.client)
+        reach = np.array([self.spec.lower_length, 0.0, 0.0])
+        return np.array([
+            np.array(s[4]) + np.array(self._p.getMatrixFromQuaternion(s[5])).reshape(3, 3) @ reach for s in states
+        ])
 
     def link_poses(self) -> list[tuple[np.ndarray, np.ndarray]]:
         """World pose (position, quaternion xyzw) of every link frame, base first."""

@@ -19,6 +19,7 @@ import numpy as np
 import pandas as pd
 
 from hexpipe.atomic import atomic_path, write_json, write_text
+from hexpipe.evaluation.metrics import stall_counts
 from hexpipe.sweep.tables import ALL, BLIND, Cell, issue10_targets, pareto_front, target_numbers
 
 
@@ -250,6 +251,16 @@ def markdown(report: SweepReport, front: list[str] | None) -> str:
                   "cost of transport", "seeds", "episodes"), results),
     ]
     parts.append(targets_section(report))
+    policy = report.episodes[report.episodes["controller"] == "policy"] if len(report.episodes) else report.episodes
+    if "stall_legs" in policy:
+        parts.append(
+            "## Where the policies' failed episodes stopped\n\nEvery seed's stuck or fallen episodes, by the legs with "
+            "a foot at a block's face when it ended (`front`: it met the face and did not lift over it; `hind`: the "
+            "body had passed the face and a hind leg had not; `none`: no foot at a face; `-`: recorded before "
+            "hexpipe kept this).\n\n"
+            + _table(("terrain", "condition", "stuck or fallen", "legs with a foot at a block face"),
+                     [(f"`{t}`", f"`{c}`", str(n), legs) for (t, c), n, legs in
+                      stall_counts(policy, {"terrain": report.terrains, "condition": list(report.conditions)})]))
     if improvement:
         parts.append(
             "## Probability of improvement\n\nP(a > b): the chance that a seed of condition a has a higher success "

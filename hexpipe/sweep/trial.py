@@ -18,7 +18,8 @@ from hexpipe.config import Params
 # evaluate's per-episode columns the sweep keeps, read by name (results.csv may gain columns)
 EPISODE_COLUMNS = ("terrain", "controller", "episode", "seed", "success", "termination", "distance", "time",
                    "cost_of_transport", "energy_j", "a_mean", "b_mean", "omega_mean",
-                   "b_before_block", "b_open")  # mean lift b (rad) in the 0.3 m before a block's face / on open ground
+                   "b_before_block", "b_open",  # mean lift b (rad) in the 0.3 m before a block's face / on open ground
+                   "stall_legs")  # stuck or fallen: the legs with a foot at a block face
 
 
 def read_episodes(results_csv: Path) -> list[dict[str, Any]]:
