@@ -145,7 +145,9 @@ class SensorConfig(_Section):
     camera_mount: Triple = (0.30, 0.0, 0.10)  # position in the base frame (m)
     heightmap_rows: Cells = 32  # cells along the heading
     heightmap_cols: Cells = 32  # cells across
-    heightmap_ahead: tuple[float, float] = (-0.2, 1.4)  # forward extent in the heading frame (m)
+    # forward extent in the heading frame (m): from behind the rear feet (they touch down 0.50 m behind the base
+    # centre), so the map shows the face a hind leg must still clear after the body has passed it
+    heightmap_ahead: tuple[float, float] = (-0.6, 1.4)
     heightmap_width: PositiveFloat = 1.6  # lateral extent (m)
 
     @model_validator(mode="after")

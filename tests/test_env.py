@@ -89,6 +89,30 @@ def test_heightmap_sees_the_block_and_camera_renders_it():
     env.close()
 
 
+def test_heightmap_reaches_behind_the_hind_feet():
+    """A hind foot stalls at a face the body has long passed (the penalty sweep's failures stopped with the base
+    ~0.48 m past the face): the map must reach behind every foot, and show that face."""
+    env = HexapodEnv("flat")
+    env.reset(seed=0)
+    behind = []
+    for _ in range(40):
+        env.step(np.zeros(3))
+        base = env.robot.base_state()[0]
+        behind += [c[5][0] - base[0] for c in env._p.getContactPoints(bodyA=env.robot.body)]
+    env.close()
+    near, _ = SensorConfig().heightmap_ahead
+    assert near < min(behind) < -0.4  # the hind feet touch down ~0.5 m behind the base; the map starts behind that
+
+    single_block = HexapodEnv("single_block")
+    single_block.reset(seed=0)
+    sensor = SENSORS["heightmap"].reader(single_block.sensor_cfg)
+    hm = sensor.read(single_block.terrain, np.array([1.48, 0.0]), yaw=0.0, plane_z=0.0)  # base 0.48 m past the face
+    single_block.close()
+    row_x = near + (np.arange(hm.shape[0]) + 0.5) * sensor.cell_x
+    assert np.allclose(hm[(row_x > -0.44) & (row_x < -0.22)], 0.10)  # the block under the hind legs
+    assert np.allclose(hm[row_x < -0.5], 0.0)  # and the ground before its face, where a hind foot stands
+
+
 def test_truncates_at_time_limit():
     env = HexapodEnv("flat", task=TaskConfig(time_limit=1.0))
     info = rollout(env, seed=0)
