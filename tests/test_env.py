@@ -90,8 +90,8 @@ def test_heightmap_sees_the_block_and_camera_renders_it():
 
 
 def test_heightmap_reaches_behind_the_hind_feet():
-    """A hind foot stalls at a face the body has long passed (the penalty sweep's failures stopped with the base
-    ~0.48 m past the face): the map must reach behind every foot, and show that face."""
+    """A hind foot stalls at a face the body has long passed (on the wide block, the policy made with the old map
+    stopped with the base 0.47-0.49 m past the face): the map must reach behind every foot, and show that face."""
     env = HexapodEnv("flat")
     env.reset(seed=0)
     behind = []
