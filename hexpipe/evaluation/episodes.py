@@ -15,7 +15,7 @@ import numpy as np
 
 from hexpipe.config import Params
 from hexpipe.envs.hexapod import HexapodEnv
-from hexpipe.envs.rewards import cost_of_transport
+from hexpipe.envs.rewards import FAILURES, cost_of_transport
 from hexpipe.evaluation.controllers import ControllerSpec, build, gait_label
 from hexpipe.evaluation.suite import Scenario
 
@@ -80,7 +80,7 @@ def legs_at_faces(foot_x: np.ndarray, groups: list[str], faces: list[float]) -> 
 
 def _stall_legs(env: HexapodEnv, termination: str | None) -> str:
     """For an episode that ended stuck or fallen, which legs stood at a block face ('' otherwise)."""
-    if termination not in ("stuck", "fall"):
+    if termination not in FAILURES:
         return ""
     foot_x = env.robot.foot_positions()[:, 0] - float(env.start_xy[0])
     faces = [lo for lo, _ in _box_spans(env)]

@@ -15,6 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from hexpipe.envs.rewards import FAILURES
+
 Table = dict[str, dict[str, dict[str, float | int]]]  # terrain -> controller -> metric -> number
 
 CONFIDENCE = 0.95
@@ -207,7 +209,7 @@ def stall_counts(rows: pd.DataFrame, order: dict[str, Sequence[str]]) -> list[tu
     One entry per combination of the `order` columns (e.g. terrain, then controller) that had any, in the order
     their values are given: (key, episodes, "hind 3, front 1"). Rows recorded before `stall_legs` existed count
     as "-"."""
-    ended = rows[rows["termination"].isin(["stuck", "fall"])]
+    ended = rows[rows["termination"].isin(FAILURES)]
     for column, values in order.items():
         ended = ended[ended[column].isin(values)]
     lines = []
