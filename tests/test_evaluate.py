@@ -174,7 +174,7 @@ def test_gait_ranking_breaks_ties_by_distance_up_to_the_goal_then_speed():
         {"gait": "fast", "success": True, "distance": 3.004, "time": 10.0, "termination": "goal"},
         {"gait": "far", "success": False, "distance": 2.5, "time": 40.0, "termination": "time_limit"},
         {"gait": "stuck", "success": False, "distance": 0.5, "time": 6.0, "termination": "stuck"},
-    ]).assign(cost_of_transport=2.0)
+    ]).assign(cost_of_transport=2.0, terrain="varied", episode=0)
     assert rank_gaits(rows, goal_distance=3.0)["gait"].tolist() == ["fast", "overshoot", "far", "stuck"]
 
 
@@ -213,6 +213,17 @@ def test_stall_counts_group_failed_episodes_in_the_given_order():
     assert stall_counts(rows, order) == [(("single_block", "open_loop"), 1, "front 1"),
                                          (("wide_block", "policy"), 3, "hind 2, front 1")]
     assert stall_counts(rows.drop(columns="stall_legs"), order)[1] == (("wide_block", "policy"), 3, "- 3")
+
+
+def test_gait_ranking_is_the_same_whatever_order_the_workers_return_episodes_in():
+    """Float sums depend on order ((0.1 + 0.2) + 0.3 != (0.3 + 0.2) + 0.1): the grid's means must not."""
+    rows = pd.DataFrame([{"gait": g, "terrain": "varied", "episode": i, "success": True, "distance": 3.0 + d,
+                          "time": 10.0 + d, "termination": "goal", "cost_of_transport": c}
+                         for g in ("a", "b") for i, (c, d) in enumerate([(0.1, 0.1), (0.2, 0.2), (0.3, 0.3)])])
+    first = rank_gaits(rows, goal_distance=3.0)
+    for seed in range(5):
+        shuffled = rows.sample(frac=1.0, random_state=seed)
+        pd.testing.assert_frame_equal(rank_gaits(shuffled, goal_distance=3.0), first, check_exact=True)
 
 
 def test_lift_is_split_between_the_last_30_cm_before_a_face_and_open_ground():

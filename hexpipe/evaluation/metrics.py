@@ -101,8 +101,12 @@ def summarise(rows: pd.DataFrame, terrains: Sequence[str], controllers: Sequence
 def rank_gaits(rows: pd.DataFrame, goal_distance: float) -> pd.DataFrame:
     """One row per gait, best first: highest success rate, then lowest mean cost of transport of the episodes that
     reach the goal; ties (and gaits that never arrive) then by longest mean distance counted up to the goal (so
-    overshooting it does not count), then shortest mean time to goal."""
+    overshooting it does not count), then shortest mean time to goal.
+
+    The worker pool returns episodes in the order they finish; the rows are sorted first, so that the means (float
+    sums) and the ranking come out bit for bit the same on every run."""
     ranked = []
+    rows = rows.sort_values(["gait", "terrain", "episode"], kind="stable")
     for gait, g in rows.groupby("gait", sort=False):
         arrived = g[g["success"]]
         ranked.append({

@@ -261,9 +261,9 @@ def evaluate(params: Params, extra_terrains: Iterable[str] = (), show_progress: 
 
     terrains = [s.stem for s in work.suite]
     order = {"terrain": _ranks([*terrains, *(s.stem for s in work.train)]), "controller": _ranks([*ORDER, GRID])}
-    rows = pd.DataFrame([r.row for r in outcome.results]).sort_values(
-        ["terrain", "controller", "episode"], key=lambda col: col.map(order[col.name]) if col.name in order else col
-    )
+    rows = pd.DataFrame([r.row for r in outcome.results]).sort_values(  # grid rows: one per gait, hence `gait`
+        ["terrain", "controller", "episode", "gait"], key=lambda col: col.map(order[col.name]) if col.name in order
+        else col, kind="stable")
     table = summarise(rows, terrains, outcome.controllers)
     _remove_stale(out_dir, work.suite, outcome.written)
     _write_traces(out_dir / TRACES, outcome.evaluated)
