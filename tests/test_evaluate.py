@@ -174,7 +174,7 @@ def test_gait_ranking_breaks_ties_by_distance_up_to_the_goal_then_speed():
         {"gait": "fast", "success": True, "distance": 3.004, "time": 10.0, "termination": "goal"},
         {"gait": "far", "success": False, "distance": 2.5, "time": 40.0, "termination": "time_limit"},
         {"gait": "stuck", "success": False, "distance": 0.5, "time": 6.0, "termination": "stuck"},
-    ]).assign(cost_of_transport=2.0, terrain="varied", episode=0)
+    ]).assign(cost_of_transport=2.0)
     assert rank_gaits(rows, goal_distance=3.0)["gait"].tolist() == ["fast", "overshoot", "far", "stuck"]
 
 

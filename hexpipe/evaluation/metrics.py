@@ -106,7 +106,7 @@ def rank_gaits(rows: pd.DataFrame, goal_distance: float) -> pd.DataFrame:
     The worker pool returns episodes in the order they finish; the rows are sorted first, so that the means (float
     sums) and the ranking come out bit for bit the same on every run."""
     ranked = []
-    rows = rows.sort_values(["gait", "terrain", "episode"], kind="stable")
+    rows = rows.sort_values(["gait", *(c for c in ("terrain", "episode", "seed") if c in rows)], kind="stable")
     for gait, g in rows.groupby("gait", sort=False):
         arrived = g[g["success"]]
         ranked.append({
