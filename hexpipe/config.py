@@ -252,6 +252,9 @@ class PpoConfig(_Section):
     # legged_gym's terrain curriculum: each env starts at difficulty 0 and is promoted when it completes its course,
     # demoted when it walks less than half of it (hexpipe/rl/curriculum.py); only `varied` terrains use the level
     curriculum: bool = True
+    # an asymmetric critic: the value network also sees the true terrain profile and the randomised physics
+    # (hexpipe/envs/privileged.py); the actor, and so the exported policy, keeps its inputs
+    privileged_critic: bool = False
     checkpoint_every: PositiveInt = 20_000
     encoder_dir: str = "data/models/vae"
     out_dir: str = "data/models/ppo"

@@ -119,3 +119,29 @@ def test_env_clock_counts_every_env_step_and_only_the_time_inside_the_env():
     assert clock.steps == 6 and clock.seconds > 0
     assert clock.steps_per_s == pytest.approx(6 / clock.seconds)
     clock.close()
+
+
+def test_a_privileged_critic_trains_resumes_and_exports_an_actor_with_the_usual_inputs(tmp_path):
+    from stable_baselines3 import PPO
+
+    from hexpipe.envs.hexapod import HexapodEnv
+    from hexpipe.rl.policy import load_policy
+
+    model = ConvVAE(in_channels=1, image_size=32, latent_dim=8)
+    export_encoder(model, tmp_path / "vae", encoder_config(model, "heightmap", (32, 32)))
+    params = tiny(tmp_path, "ppo.n_envs=2", "ppo.privileged_critic=true", "ppo.total_timesteps=128")
+    train_ppo(params, show_progress=False)
+    longer = tiny(tmp_path, "ppo.n_envs=2", "ppo.privileged_critic=true")
+    assert train_ppo(longer, resume=True, show_progress=False)["timesteps"] == 256  # the checkpoint reloads
+    trained = PPO.load(tmp_path / "ppo" / "policy" / "model.zip", device="cpu")
+    assert trained.policy.observation_space.shape == (25 + 32 + 2,) and trained.policy.actor_dim == 25
+    config = json.loads((tmp_path / "ppo" / "policy.json").read_text())
+    assert config["observation_dim"] == 25 and config["privileged_critic"]
+    policy = load_policy(tmp_path / "ppo", longer)  # evaluate's view: the actor alone, no privileged input
+    env = HexapodEnv.from_params(policy.params, "single_block", obs_sensors=policy.sensors)
+    obs, _ = env.reset(seed=0)
+    x = policy.normaliser(policy.features(obs))
+    hidden = np.random.default_rng(0).normal(size=(1, 34)).astype(np.float32)  # whatever the critic saw
+    expected, _ = trained.policy.predict(np.concatenate([x, hidden], axis=1), deterministic=True)
+    np.testing.assert_array_equal(policy.predict(obs), expected.reshape(-1))
+    env.close()

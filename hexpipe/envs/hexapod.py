@@ -32,6 +32,7 @@ from gymnasium import spaces
 
 from hexpipe import sensors as registry
 from hexpipe.config import CpgConfig, Params, SensorConfig, SimConfig, TaskConfig
+from hexpipe.envs.privileged import PRIVILEGED, privileged_space, privileged_vector
 from hexpipe.envs.rewards import failure_penalty, forward_velocity_reward, power_penalty
 from hexpipe.envs.state import WORLD_FRAME, EnvScene, EnvState
 from hexpipe.sensors.heightmap import HEADING_FRAME, quat_to_yaw
@@ -48,8 +49,9 @@ def quat_to_roll_pitch(q: np.ndarray) -> tuple[float, float]:
     return roll, pitch
 
 
-def observation_space(cpg: CpgConfig, sensors: SensorConfig, task: TaskConfig) -> spaces.Dict:
-    """The observation Dict an env with these settings produces; needs no simulator."""
+def observation_space(cpg: CpgConfig, sensors: SensorConfig, task: TaskConfig, privileged: bool = False) -> spaces.Dict:
+    """The observation Dict an env with these settings produces; needs no simulator. privileged: add the critic's
+    `privileged` vector (hexpipe/envs/privileged.py)."""
     lo, hi = np.asarray(cpg.lower), np.asarray(cpg.upper)
     rate = np.asarray(cpg.rate_limit)
     obs: dict[str, spaces.Space] = {
@@ -60,6 +62,8 @@ def observation_space(cpg: CpgConfig, sensors: SensorConfig, task: TaskConfig) -
     }
     for name in task.sensors:
         obs[name] = registry.get(name).space(sensors)
+    if privileged:
+        obs[PRIVILEGED] = privileged_space(sensors)
     return spaces.Dict(obs)
 
 
@@ -81,7 +85,10 @@ class HexapodEnv(gym.Env):
         randomize: bool = False,
         render_mode: str | None = None,
         robot: RobotSpec | None = None,
+        privileged: bool = False,
     ):
+        """privileged: observations also carry `privileged`, the true terrain profile and physics that only an
+        asymmetric critic sees in training (ppo.privileged_critic)."""
         import pybullet as p
 
         self.sim_cfg = sim or SimConfig()
@@ -91,6 +98,7 @@ class HexapodEnv(gym.Env):
         self.recipe = load_terrain(terrain) if isinstance(terrain, str) else terrain
         self.robot_spec = robot or RobotSpec()
         self.randomize = randomize
+        self.privileged = privileged
         self.render_mode = render_mode
         if initial_cpg is not None:
             lo, hi = np.asarray(self.cpg_cfg.lower), np.asarray(self.cpg_cfg.upper)
@@ -113,8 +121,11 @@ class HexapodEnv(gym.Env):
         self._readers: dict[str, Callable[[registry.SimView], np.ndarray]] = {}  # made on first use
 
         self.action_space = spaces.Box(-1.0, 1.0, shape=(3,), dtype=np.float32)
-        self.observation_space = observation_space(self.cpg_cfg, self.sensor_cfg, self.task)
-        self._observed = [k for k in self.observation_space.spaces if k not in ("body", "cpg")]
+        self.observation_space = observation_space(self.cpg_cfg, self.sensor_cfg, self.task, privileged)
+        self._observed = list(self.task.sensors)
+        # what one observation reads: the observed sensors, and the height map for the privileged profile
+        self._sensed = self._observed + (["heightmap"] if privileged and "heightmap" not in self._observed else [])
+        self._physics = (self.sim_cfg.friction, 1.0)  # (friction, base-mass scale) drawn at reset
         self._accel_limit = np.asarray(self.cpg_cfg.accel_limit)
         self._max_joint_step = self.robot_spec.speeds * self.physics_dt
         self.terrain: Terrain | None = None
@@ -165,6 +176,7 @@ class HexapodEnv(gym.Env):
             p.changeDynamics(body, -1, lateralFriction=friction, physicsClientId=c)
         if mass_scale != 1.0:
             self.robot.scale_base_mass(mass_scale)
+        self._physics = (friction, mass_scale)
         targets = self.gait.joint_targets(self.cpg.xy)
         self.robot.reset_joints(targets)
         self._targets = targets
@@ -250,9 +262,11 @@ class HexapodEnv(gym.Env):
             "body": np.clip(body, -100, 100).astype(np.float32),
             "cpg": np.concatenate([self.cpg.params, self.cpg.rates]).astype(np.float32),
         }
-        sensed = self.sense(self._observed, base=(pos, quat))
+        sensed = self.sense(self._sensed, base=(pos, quat))
         for name in self._observed:
             obs[name] = registry.get(name).observation(sensed[name])
+        if self.privileged:
+            obs[PRIVILEGED] = privileged_vector(sensed["heightmap"], *self._physics, self.sensor_cfg)
         return obs
 
     def sense(self, names: Iterable[str], base: tuple[np.ndarray, np.ndarray] | None = None) -> dict[str, np.ndarray]:

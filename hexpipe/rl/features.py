@@ -11,7 +11,8 @@ Two pieces, one per process:
   It pays where cores are spare (a sweep node).
 * `TerrainFeatures` (a VecEnv wrapper, in the learner) lays the Dict out as one float32 vector
   [body, cpg, embedding], so PPO stores 25 numbers per step (27 with task.observe_position) and never re-encodes
-  in its update epochs.
+  in its update epochs. With ppo.privileged_critic the critic's `privileged` vector follows, last, so the actor
+  reads the first `actor_dim` numbers (hexpipe/rl/asymmetric.py).
 
 `feature_vector` is that layout for one raw observation: what a loaded policy computes at run time.
 """
@@ -24,6 +25,8 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 from stable_baselines3.common.vec_env import VecEnv, VecEnvWrapper
+
+from hexpipe.envs.privileged import PRIVILEGED
 
 PROPRIOCEPTIVE_KEYS = ("body", "cpg")
 EMBEDDING = "embedding"  # the observation key TerrainEmbedding adds
@@ -88,7 +91,9 @@ class TerrainFeatures(VecEnvWrapper):
     def __init__(self, venv: VecEnv, expect_embedding: bool | None = None):
         """expect_embedding: True/False refuses envs that do not / do carry an embedding (None: take either)."""
         raw: spaces.Dict = venv.observation_space  # type: ignore[assignment]
-        self.keys = PROPRIOCEPTIVE_KEYS + ((EMBEDDING,) if EMBEDDING in raw.spaces else ())
+        actor_keys = PROPRIOCEPTIVE_KEYS + ((EMBEDDING,) if EMBEDDING in raw.spaces else ())
+        self.keys = actor_keys + ((PRIVILEGED,) if PRIVILEGED in raw.spaces else ())
+        self.actor_dim = sum(int(np.prod(raw[k].shape)) for k in actor_keys)  # what the policy itself reads
         if expect_embedding is not None and (EMBEDDING in raw.spaces) != expect_embedding:
             raise ValueError(f"the envs {'lack' if expect_embedding else 'carry'} a terrain embedding "
                              f"(observation keys: {sorted(raw.spaces)})")

@@ -43,17 +43,23 @@ class ObservationNormaliser:
 
 
 def export_weights(model: Any, directory: Path) -> None:
-    """Write weights.pt and weights.json for `model` (SB3 PPO, MlpPolicy) and its VecNormalize into `directory`."""
-    policy = model.policy
+    """Write weights.pt and weights.json for `model` (SB3 PPO, MlpPolicy) and its VecNormalize into `directory`.
+
+    An asymmetric policy (ppo.privileged_critic) is written as its actor alone, over the actor's inputs: the
+    privileged features and their normalisation are left out (`asymmetric.actor_only`)."""
+    from hexpipe.rl.asymmetric import actor_only
+
+    policy = actor_only(model.policy)
+    dim = int(np.prod(policy.observation_space.shape))
     normaliser = model.get_vec_normalize_env()
     norm = None
-    if normaliser is not None and normaliser.norm_obs:
-        norm = {"mean": normaliser.obs_rms.mean.tolist(), "var": normaliser.obs_rms.var.tolist(),
+    if normaliser is not None and normaliser.norm_obs:  # the leading `dim` features are the actor's
+        norm = {"mean": normaliser.obs_rms.mean[:dim].tolist(), "var": normaliser.obs_rms.var[:dim].tolist(),
                 "epsilon": float(normaliser.epsilon), "clip": float(normaliser.clip_obs)}
     space = policy.action_space
     config = {
         "format_version": FORMAT_VERSION,
-        "observation_dim": int(np.prod(policy.observation_space.shape)),
+        "observation_dim": dim,
         "action_low": space.low.tolist(),
         "action_high": space.high.tolist(),
         "net_arch": policy.net_arch,

@@ -20,6 +20,7 @@ from hexpipe import sensors as registry
 from hexpipe.atomic import atomic_path, write_json, write_text
 from hexpipe.config import Params, params_hash
 from hexpipe.envs.hexapod import HexapodEnv
+from hexpipe.rl.asymmetric import AsymmetricPolicy
 from hexpipe.rl.checkpoint import (
     MODEL,
     NORMALISATION,
@@ -41,13 +42,14 @@ PPO_SPEED = ("time",)  # dvclive's time/* metrics: steps per second, measured, n
 def env_factory(params: Params, terrain: str, encoder: Encoder | None, randomize: bool) -> Callable[[], gym.Env]:
     """A picklable constructor for one environment (SubprocVecEnv builds it in the worker): it observes the
     encoder's sensor and embeds it there (`TerrainEmbedding`); with ppo.curriculum it keeps its own difficulty level
-    (hexpipe/rl/curriculum.py)."""
+    (hexpipe/rl/curriculum.py); with ppo.privileged_critic it adds the critic's privileged vector."""
     parent = os.getpid()
     sensors = () if encoder is None else (encoder.modality,)
 
     def make() -> gym.Env:
         die_with_parent(parent)  # in a SubprocVecEnv worker: no orphan after a kill -9 of train-ppo
-        env: gym.Env = HexapodEnv.from_params(params, terrain, obs_sensors=sensors, randomize=randomize)
+        env: gym.Env = HexapodEnv.from_params(params, terrain, obs_sensors=sensors, randomize=randomize,
+                                              privileged=params.ppo.privileged_critic)
         if params.ppo.curriculum:
             env = Curriculum(env, goal=params.task.goal_distance)
         if encoder is None:
@@ -124,6 +126,7 @@ def policy_config(params: Params, encoder, observation_dim: int) -> dict[str, An
         "train_terrains": list(params.ppo.train_terrains),
         "randomize": params.ppo.randomize,
         "observe_position": params.task.observe_position,
+        "privileged_critic": params.ppo.privileged_critic,  # training only: the policy's inputs are the same
     }
 
 
@@ -223,7 +226,8 @@ def train_ppo(params: Params, resume: bool = False, show_progress: bool = True) 
     if newest >= cfg.total_timesteps and _finished(out_dir, signature, newest):
         return {"finished": True, "timesteps": newest}
     clock = EnvClock(make_vec_env(params, cfg.train_terrains, cfg.n_envs, encoder, cfg.randomize, cfg.seed))
-    venv = TerrainFeatures(clock, expect_embedding=encoder is not None)
+    features = TerrainFeatures(clock, expect_embedding=encoder is not None)
+    venv = features
 
     loaded = load_checkpoint(candidates, venv) if candidates else None
     if loaded is None and candidates:  # none loads: start over in a clean, re-stamped folder
@@ -234,11 +238,13 @@ def train_ppo(params: Params, resume: bool = False, show_progress: bool = True) 
         say(f"train-ppo: resuming from {start_from} ({model.num_timesteps} of {cfg.total_timesteps} steps)")
     else:
         venv = VecNormalize(venv, norm_obs=True, norm_reward=True, clip_obs=10.0, gamma=cfg.gamma)
+        policy, kwargs = "MlpPolicy", {"net_arch": list(cfg.net_arch)}
+        if cfg.privileged_critic:  # the critic reads every feature, the actor the leading actor_dim
+            policy, kwargs = AsymmetricPolicy, {**kwargs, "actor_dim": features.actor_dim}
         model = PPO(
-            "MlpPolicy", venv, n_steps=cfg.n_steps, batch_size=cfg.batch_size, n_epochs=cfg.n_epochs,
+            policy, venv, n_steps=cfg.n_steps, batch_size=cfg.batch_size, n_epochs=cfg.n_epochs,
             learning_rate=cfg.learning_rate, gamma=cfg.gamma, gae_lambda=cfg.gae_lambda, clip_range=cfg.clip_range,
-            ent_coef=cfg.ent_coef, policy_kwargs={"net_arch": list(cfg.net_arch)}, seed=cfg.seed, device="cpu",
-            verbose=0,
+            ent_coef=cfg.ent_coef, policy_kwargs=kwargs, seed=cfg.seed, device="cpu", verbose=0,
         )
 
     live = Live(str(report_dir), dvcyaml=False, save_dvc_exp=False, resume=start_from is not None)
@@ -257,7 +263,7 @@ def train_ppo(params: Params, resume: bool = False, show_progress: bool = True) 
     save_checkpoint(model, checkpoints)
     save_policy(model, out_dir / "policy")
     export_weights(model, out_dir / "policy")  # what evaluate and play load: tensors and JSON, no pickle
-    config = policy_config(params, encoder, int(venv.observation_space.shape[0]))
+    config = policy_config(params, encoder, features.actor_dim)
     write_json(out_dir / POLICY_CONFIG, {**config, "signature": signature, "timesteps": int(model.num_timesteps)})
 
     # rates only when steps were taken now (a resume at the budget just re-exports the policy)
