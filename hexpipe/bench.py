@@ -116,20 +116,40 @@ def _median_call(fn, repeats: int = 300) -> float:
     return statistics.median(samples)
 
 
-def bench_training(params: Params, steps: int = 3072, terrain: str | None = None) -> dict:
-    """PPO training steps/s with `ppo.n_envs` worker envs against the bare vectorised env rate in the same run.
+FORWARDS = ("numpy", "torch")  # the rollout forward pass: train-ppo's (hexpipe/rl/rollout.py), SB3's own
+
+
+def bench_training(params: Params, steps: int = 3072, terrain: str | None = None, rounds: int = 2) -> dict:
+    """PPO training steps/s with `ppo.n_envs` worker envs against the bare vectorised env rate in the same run,
+    with train-ppo's numpy rollout forward and with SB3's torch one, alternated for `rounds` rounds (medians).
 
     The policy sees what `train-ppo` gives it (an encoder of the configured VAE shape, untrained: its weights do
-    not change its cost), embedded in the env workers as in training. `bare_env_steps_per_s` is timed inside the run
-    (rl.train.EnvClock: physics, sensor and encoder, the observation the policy consumes), so both numbers share
-    the machine's load. Budget: `steps` timesteps, a few PPO rollouts and updates.
+    not change its cost), embedded in the env workers as in training. `bare_env_steps_per_s` is timed inside each
+    run (rl.train.EnvClock: physics, sensor and encoder, the observation the policy consumes), so both numbers share
+    the machine's load. Budget: `steps` timesteps per run, a few PPO rollouts and updates.
     """
+    runs: dict[str, list[dict]] = {name: [] for name in FORWARDS}
+    for _ in range(rounds):
+        for name in FORWARDS:
+            runs[name].append(_training_run(params, steps, terrain, numpy_forward=name == "numpy"))
+    out: dict = {}
+    for name, results in runs.items():
+        out[name] = {key: statistics.median(r[key] for r in results)
+                     for key in ("train_steps_per_s", "bare_env_steps_per_s", "train_vs_bare", "seconds")}
+    first = runs["numpy"][0]
+    return {"n_envs": first["n_envs"], "timesteps": first["timesteps"], "terrains": first["terrains"],
+            "encoder": first["encoder"], "rounds": rounds, **out["numpy"], "forwards": out,
+            "numpy_vs_torch_forward": out["numpy"]["train_steps_per_s"] / out["torch"]["train_steps_per_s"]}
+
+
+def _training_run(params: Params, steps: int, terrain: str | None, numpy_forward: bool) -> dict:
     import torch
     from stable_baselines3 import PPO
     from stable_baselines3.common.vec_env import VecNormalize
 
     from hexpipe.models.vae import ConvVAE, FrozenEncoder, channels_for, encoder_config
     from hexpipe.rl.features import TerrainFeatures
+    from hexpipe.rl.rollout import RolloutPolicy
     from hexpipe.rl.train import EnvClock, make_vec_env
 
     cfg, vae = params.ppo, params.vae
@@ -143,9 +163,10 @@ def bench_training(params: Params, steps: int = 3072, terrain: str | None = None
     clock = EnvClock(make_vec_env(params, terrains, cfg.n_envs, encoder, cfg.randomize, cfg.seed))
     venv = VecNormalize(TerrainFeatures(clock), norm_obs=True, norm_reward=True, gamma=cfg.gamma)
     agent = PPO(
-        "MlpPolicy", venv, n_steps=cfg.n_steps, batch_size=cfg.batch_size, n_epochs=cfg.n_epochs,
-        learning_rate=cfg.learning_rate, gamma=cfg.gamma, gae_lambda=cfg.gae_lambda, clip_range=cfg.clip_range,
-        policy_kwargs={"net_arch": list(cfg.net_arch)}, seed=cfg.seed, device="cpu", verbose=0,
+        RolloutPolicy if numpy_forward else "MlpPolicy", venv, n_steps=cfg.n_steps, batch_size=cfg.batch_size,
+        n_epochs=cfg.n_epochs, learning_rate=cfg.learning_rate, gamma=cfg.gamma, gae_lambda=cfg.gae_lambda,
+        clip_range=cfg.clip_range, policy_kwargs={"net_arch": list(cfg.net_arch)}, seed=cfg.seed, device="cpu",
+        verbose=0,
     )
     start = time.perf_counter()
     agent.learn(steps)

@@ -24,6 +24,8 @@ def test_bench_env_reports_default_against_baseline():
 def test_bench_training_times_ppo_against_the_bare_env():
     params = Params().model_copy(update={"ppo": Params().ppo.model_copy(update={"n_steps": 16, "batch_size": 16,
                                                                                 "n_epochs": 1})})
-    result = bench_training(params, steps=64, terrain="flat")
+    result = bench_training(params, steps=64, terrain="flat", rounds=1)
     assert result["timesteps"] >= 64 and result["n_envs"] == 2 and result["encoder"]
     assert result["train_vs_bare"] > 0 and result["bare_env_steps_per_s"] > 0
+    assert set(result["forwards"]) == {"numpy", "torch"} and result["numpy_vs_torch_forward"] > 0
+    assert result["train_vs_bare"] == result["forwards"]["numpy"]["train_vs_bare"]  # train-ppo's forward

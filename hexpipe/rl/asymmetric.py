@@ -14,6 +14,8 @@ import torch as th
 from stable_baselines3.common.policies import ActorCriticPolicy
 from stable_baselines3.common.torch_layers import MlpExtractor
 
+from hexpipe.rl.rollout import NumpyRollout
+
 
 class AsymmetricMlpExtractor(MlpExtractor):
     """SB3's MlpExtractor whose policy network reads features[:, :actor_dim] and value network every feature."""
@@ -30,8 +32,9 @@ class AsymmetricMlpExtractor(MlpExtractor):
         return self.policy_net(features[:, : self.actor_dim])
 
 
-class AsymmetricPolicy(ActorCriticPolicy):
-    """ActorCriticPolicy with an `actor_dim` keyword: the actor sees that many leading features, the critic all."""
+class AsymmetricPolicy(NumpyRollout, ActorCriticPolicy):
+    """ActorCriticPolicy with an `actor_dim` keyword: the actor sees that many leading features, the critic all.
+    Its rollout forward runs in numpy, as `RolloutPolicy`'s does."""
 
     def __init__(self, *args: Any, actor_dim: int, **kwargs: Any):
         self.actor_dim = actor_dim  # read by _build_mlp_extractor, which the parent's constructor calls

@@ -32,6 +32,7 @@ from hexpipe.rl.checkpoint import (
 from hexpipe.rl.curriculum import Curriculum, CurriculumStats
 from hexpipe.rl.features import Encoder, TerrainEmbedding, TerrainFeatures
 from hexpipe.rl.inference import export_weights
+from hexpipe.rl.rollout import RolloutPolicy
 from hexpipe.speed import SPEED_JSON, move_speed
 from hexpipe.workers import die_with_parent
 
@@ -238,7 +239,7 @@ def train_ppo(params: Params, resume: bool = False, show_progress: bool = True) 
         say(f"train-ppo: resuming from {start_from} ({model.num_timesteps} of {cfg.total_timesteps} steps)")
     else:
         venv = VecNormalize(venv, norm_obs=True, norm_reward=True, clip_obs=10.0, gamma=cfg.gamma)
-        policy, kwargs = "MlpPolicy", {"net_arch": list(cfg.net_arch)}
+        policy, kwargs = RolloutPolicy, {"net_arch": list(cfg.net_arch)}  # MlpPolicy, numpy rollout forward
         if cfg.privileged_critic:  # the critic reads every feature, the actor the leading actor_dim
             policy, kwargs = AsymmetricPolicy, {**kwargs, "actor_dim": features.actor_dim}
         model = PPO(
