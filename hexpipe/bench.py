@@ -139,7 +139,35 @@ def bench_training(params: Params, steps: int = 3072, terrain: str | None = None
     first = runs["numpy"][0]
     return {"n_envs": first["n_envs"], "timesteps": first["timesteps"], "terrains": first["terrains"],
             "encoder": first["encoder"], "rounds": rounds, **out["numpy"], "forwards": out,
-            "numpy_vs_torch_forward": out["numpy"]["train_steps_per_s"] / out["torch"]["train_steps_per_s"]}
+            "numpy_vs_torch_forward": out["numpy"]["train_steps_per_s"] / out["torch"]["train_steps_per_s"],
+            "forward_us": forward_cost(params)}
+
+
+def forward_cost(params: Params, calls: int = 2000) -> dict[str, float]:
+    """Median microseconds of one rollout forward pass (a batch of ppo.n_envs observations of the policy's size,
+    no gradient), SB3's torch forward against the numpy one, on the same network."""
+    import torch
+    from gymnasium import spaces
+    from stable_baselines3.common.policies import ActorCriticPolicy
+
+    from hexpipe.rl.features import PROPRIOCEPTIVE_KEYS
+    from hexpipe.rl.rollout import RolloutPolicy
+
+    torch.set_num_threads(1)
+    body = HexapodEnv.observation_spec(params, obs_sensors=()).spaces
+    dim = sum(int(np.prod(body[k].shape)) for k in PROPRIOCEPTIVE_KEYS)
+    dim += 0 if params.ppo.blind else params.vae.latent_dim
+    space = spaces.Box(-np.inf, np.inf, shape=(dim,), dtype=np.float32)
+    policy = RolloutPolicy(space, spaces.Box(-1, 1, (3,)), lr_schedule=lambda _: 0.0,
+                           net_arch=list(params.ppo.net_arch))
+    obs = torch.as_tensor(np.random.default_rng(0).normal(size=(params.ppo.n_envs, dim)).astype(np.float32))
+    forwards = {"numpy": policy.forward, "torch": lambda x: ActorCriticPolicy.forward(policy, x)}
+    policy.set_training_mode(False)
+    out = {}
+    with torch.no_grad():
+        for name, forward in forwards.items():
+            out[name] = 1e6 * _median_call(lambda f=forward: f(obs), repeats=calls)
+    return out
 
 
 def _training_run(params: Params, steps: int, terrain: str | None, numpy_forward: bool) -> dict:

@@ -3,9 +3,8 @@ fraction of torch's per-call cost.
 
 On 2 cores with 2 envs, SB3's PPO waits for the envs, then for the policy, then for the envs again: nothing
 overlaps, so every microsecond of the forward pass is lost env time. For a batch of 2 and two 64-wide layers,
-torch's eager forward (about 20 operator calls, a distribution object and its checks) takes about 170 us on an
-idle core and 0.45 ms inside training, against about 20 us for the same arithmetic in numpy
-(benchmarks in `hexpipe bench`, training/train_vs_bare).
+torch's eager forward is about 20 operator calls plus a distribution object and its checks; the same arithmetic in
+numpy costs a fraction of that (`hexpipe bench`: `training.forward_us`, and training's rate with each forward).
 
 Only the rollout changes. While the policy is in eval mode and no gradient is taken, `forward` runs the copy of the
 weights taken when SB3 switched to eval mode (at the start of every rollout, after the last update); the PPO
