@@ -116,12 +116,13 @@ def _median_call(fn, repeats: int = 300) -> float:
     return statistics.median(samples)
 
 
-FORWARDS = ("numpy", "torch")  # the rollout forward pass: train-ppo's (hexpipe/rl/rollout.py), SB3's own
+FORWARDS = ("numpy", "torch")  # the rollout forward pass (ppo.rollout_forward): hexpipe/rl/rollout.py's, SB3's own
 
 
 def bench_training(params: Params, steps: int = 3072, terrain: str | None = None, rounds: int = 2) -> dict:
     """PPO training steps/s with `ppo.n_envs` worker envs against the bare vectorised env rate in the same run,
-    with train-ppo's numpy rollout forward and with SB3's torch one, alternated for `rounds` rounds (medians).
+    with the numpy rollout forward and with SB3's torch one, alternated for `rounds` rounds (medians); the top-level
+    figures are those of the configured one (ppo.rollout_forward).
 
     The policy sees what `train-ppo` gives it (an encoder of the configured VAE shape, untrained: its weights do
     not change its cost), embedded in the env workers as in training. `bare_env_steps_per_s` is timed inside each
@@ -138,7 +139,8 @@ def bench_training(params: Params, steps: int = 3072, terrain: str | None = None
                      for key in ("train_steps_per_s", "bare_env_steps_per_s", "train_vs_bare", "seconds")}
     first = runs["numpy"][0]
     return {"n_envs": first["n_envs"], "timesteps": first["timesteps"], "terrains": first["terrains"],
-            "encoder": first["encoder"], "rounds": rounds, **out["numpy"], "forwards": out,
+            "encoder": first["encoder"], "rounds": rounds, "rollout_forward": params.ppo.rollout_forward,
+            **out[params.ppo.rollout_forward], "forwards": out,
             "numpy_vs_torch_forward": out["numpy"]["train_steps_per_s"] / out["torch"]["train_steps_per_s"],
             "forward_us": forward_cost(params)}
 

@@ -283,9 +283,9 @@ def bench(
         t = result["training"]
         console.print(
             f"PPO, {t['n_envs']} envs: {t['train_steps_per_s']:.0f} steps/s, {t['train_vs_bare']:.0%} of the bare "
-            f"env's {t['bare_env_steps_per_s']:.0f} steps/s in the same run (medians of {t['rounds']} runs); SB3's "
-            f"torch forward {t['forwards']['torch']['train_vs_bare']:.0%}, numpy forward "
-            f"{t['numpy_vs_torch_forward']:.2f}x its training rate"
+            f"env's {t['bare_env_steps_per_s']:.0f} steps/s in the same run ({t['rollout_forward']} rollout forward, "
+            f"medians of {t['rounds']} runs); torch forward {t['forwards']['torch']['train_vs_bare']:.0%}, numpy "
+            f"forward {t['forwards']['numpy']['train_vs_bare']:.0%} ({t['numpy_vs_torch_forward']:.2f}x the rate)"
         )
     console.print(f"wrote {out}")
 

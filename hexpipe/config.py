@@ -10,7 +10,7 @@ import hashlib
 import json
 import math
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated, Any, Literal
 
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
@@ -255,6 +255,9 @@ class PpoConfig(_Section):
     # an asymmetric critic: the value network also sees the true terrain profile and the randomised physics
     # (hexpipe/envs/privileged.py); the actor, and so the exported policy, keeps its inputs
     privileged_critic: bool = False
+    # the policy's forward pass while collecting: SB3's torch one, or the same network in numpy (hexpipe/rl/rollout.py,
+    # a faster learner on 2 cores; other random draws, so other runs than torch's for the same seed)
+    rollout_forward: Literal["torch", "numpy"] = "torch"
     checkpoint_every: PositiveInt = 20_000
     encoder_dir: str = "data/models/vae"
     out_dir: str = "data/models/ppo"

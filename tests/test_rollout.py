@@ -8,7 +8,7 @@ import torch
 from gymnasium import spaces
 from test_ppo import tiny
 
-from hexpipe.rl.asymmetric import AsymmetricPolicy
+from hexpipe.rl.asymmetric import NumpyAsymmetricPolicy
 from hexpipe.rl.rollout import RolloutPolicy
 from hexpipe.rl.train import train_ppo
 
@@ -71,7 +71,7 @@ def test_training_mode_and_gradients_use_torch_and_an_update_refreshes_the_copy(
 
 
 def test_the_asymmetric_actor_ignores_privileged_features_in_numpy_too():
-    policy = make(AsymmetricPolicy, dim=30, actor_dim=25)
+    policy = make(NumpyAsymmetricPolicy, dim=30, actor_dim=25)
     policy.set_training_mode(False)
     x = torch.randn(4, 30)
     moved = x.clone()
@@ -92,6 +92,18 @@ def weights_digest(path) -> str:
 def test_training_is_deterministic_for_a_seed_and_differs_across_seeds(tmp_path):
     runs = {}
     for name, seed in (("a", 0), ("b", 0), ("c", 1)):
-        train_ppo(tiny(tmp_path / name, "ppo.blind=true", "ppo.n_envs=2", f"ppo.seed={seed}"), show_progress=False)
+        numpy_forward = ("ppo.blind=true", "ppo.n_envs=2", "ppo.rollout_forward=numpy")
+        params = tiny(tmp_path / name, *numpy_forward, f"ppo.seed={seed}")
+        train_ppo(params, show_progress=False)
         runs[name] = weights_digest(tmp_path / name)
     assert runs["a"] == runs["b"] != runs["c"]
+
+
+def test_the_setting_picks_the_policy_class():
+    from stable_baselines3.common.policies import ActorCriticPolicy
+
+    from hexpipe.rl.asymmetric import AsymmetricPolicy
+    from hexpipe.rl.train import policy_class
+
+    assert policy_class(False, False) is ActorCriticPolicy and policy_class(False, True) is RolloutPolicy
+    assert policy_class(True, False) is AsymmetricPolicy and policy_class(True, True) is NumpyAsymmetricPolicy

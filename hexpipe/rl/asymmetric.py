@@ -32,9 +32,8 @@ class AsymmetricMlpExtractor(MlpExtractor):
         return self.policy_net(features[:, : self.actor_dim])
 
 
-class AsymmetricPolicy(NumpyRollout, ActorCriticPolicy):
-    """ActorCriticPolicy with an `actor_dim` keyword: the actor sees that many leading features, the critic all.
-    Its rollout forward runs in numpy, as `RolloutPolicy`'s does."""
+class AsymmetricPolicy(ActorCriticPolicy):
+    """ActorCriticPolicy with an `actor_dim` keyword: the actor sees that many leading features, the critic all."""
 
     def __init__(self, *args: Any, actor_dim: int, **kwargs: Any):
         self.actor_dim = actor_dim  # read by _build_mlp_extractor, which the parent's constructor calls
@@ -48,6 +47,10 @@ class AsymmetricPolicy(NumpyRollout, ActorCriticPolicy):
 
     def _get_constructor_parameters(self) -> dict[str, Any]:
         return {**super()._get_constructor_parameters(), "actor_dim": self.actor_dim}
+
+
+class NumpyAsymmetricPolicy(NumpyRollout, AsymmetricPolicy):
+    """AsymmetricPolicy with the numpy rollout forward (hexpipe/rl/rollout.py)."""
 
 
 def actor_only(policy: ActorCriticPolicy) -> ActorCriticPolicy:

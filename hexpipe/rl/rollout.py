@@ -11,6 +11,10 @@ weights taken when SB3 switched to eval mode (at the start of every rollout, aft
 update, `predict` and value bootstrapping stay torch. Actions are drawn from the same N(mean, exp(log_std)) from a
 numpy generator seeded from torch's, so a run is as deterministic as before, though not bit-identical to a run
 with torch's forward (other random draws, other rounding).
+
+Opt-in (`ppo.rollout_forward: numpy`), not the default: over the first seeds it trained worse policies than the
+torch forward on the same seeds' budget (reports/experiments/README.md, "rollout_forward"), which the arithmetic
+does not explain, so it has to earn its place over more seeds first.
 """
 
 from __future__ import annotations

@@ -14,13 +14,14 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 from stable_baselines3 import PPO
+from stable_baselines3.common.policies import ActorCriticPolicy
 from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecEnv, VecEnvWrapper, VecNormalize
 
 from hexpipe import sensors as registry
 from hexpipe.atomic import atomic_path, write_json, write_text
 from hexpipe.config import Params, params_hash
 from hexpipe.envs.hexapod import HexapodEnv
-from hexpipe.rl.asymmetric import AsymmetricPolicy
+from hexpipe.rl.asymmetric import AsymmetricPolicy, NumpyAsymmetricPolicy
 from hexpipe.rl.checkpoint import (
     MODEL,
     NORMALISATION,
@@ -72,6 +73,14 @@ def make_vec_env(
     venv = SubprocVecEnv(fns, start_method="fork") if n_envs > 1 else DummyVecEnv(fns)
     venv.seed(seed)
     return venv
+
+
+def policy_class(privileged_critic: bool, numpy_forward: bool) -> type[ActorCriticPolicy]:
+    """SB3's MlpPolicy, or the asymmetric one (ppo.privileged_critic), each with SB3's torch rollout forward or the
+    numpy one (ppo.rollout_forward)."""
+    if privileged_critic:
+        return NumpyAsymmetricPolicy if numpy_forward else AsymmetricPolicy
+    return RolloutPolicy if numpy_forward else ActorCriticPolicy
 
 
 def load_terrain_encoder(params: Params):
@@ -239,9 +248,10 @@ def train_ppo(params: Params, resume: bool = False, show_progress: bool = True) 
         say(f"train-ppo: resuming from {start_from} ({model.num_timesteps} of {cfg.total_timesteps} steps)")
     else:
         venv = VecNormalize(venv, norm_obs=True, norm_reward=True, clip_obs=10.0, gamma=cfg.gamma)
-        policy, kwargs = RolloutPolicy, {"net_arch": list(cfg.net_arch)}  # MlpPolicy, numpy rollout forward
+        kwargs: dict[str, Any] = {"net_arch": list(cfg.net_arch)}
         if cfg.privileged_critic:  # the critic reads every feature, the actor the leading actor_dim
-            policy, kwargs = AsymmetricPolicy, {**kwargs, "actor_dim": features.actor_dim}
+            kwargs["actor_dim"] = features.actor_dim
+        policy = policy_class(cfg.privileged_critic, cfg.rollout_forward == "numpy")
         model = PPO(
             policy, venv, n_steps=cfg.n_steps, batch_size=cfg.batch_size, n_epochs=cfg.n_epochs,
             learning_rate=cfg.learning_rate, gamma=cfg.gamma, gae_lambda=cfg.gae_lambda, clip_range=cfg.clip_range,
