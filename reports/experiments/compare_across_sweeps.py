@@ -1,0 +1,42 @@
+"""P(a beats b) over training seeds, as a sweep report computes it (hexpipe.sweep.tables.improvements), for conditions
+whose trials ran in different sweeps: each side pools the records of one or more SWEEP_FOLDER:CONDITION.
+
+    .venv/bin/python reports/experiments/compare_across_sweeps.py \
+        --a reports/sweeps/levers:default --a reports/sweeps/forward:numpy \
+        --b reports/sweeps/privileged:default --b reports/sweeps/forward:torch
+"""
+
+import argparse
+import json
+from pathlib import Path
+
+from hexpipe.sweep.tables import LEARNED, episodes_frame, improvements, per_seed
+
+
+def records(sources: list[str], name: str) -> list[dict]:
+    out = []
+    for source in sources:
+        folder, _, condition = source.rpartition(":")
+        for path in sorted(Path(folder).glob(f"{condition}-seed*/result.json")):
+            out.append({**json.loads(path.read_text()), "condition": name})
+    return out
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--a", action="append", required=True, help="SWEEP_FOLDER:CONDITION (repeatable)")
+    parser.add_argument("--b", action="append", required=True, help="SWEEP_FOLDER:CONDITION (repeatable)")
+    args = parser.parse_args()
+    episodes = episodes_frame(records(args.a, "a") + records(args.b, "b"))
+    episodes = episodes[episodes["controller"] == LEARNED]
+    terrains = list(dict.fromkeys(episodes["terrain"]))
+    result = improvements(per_seed(episodes), [("a", "b")], terrains)["a_vs_b"]["all"]
+    pooled = episodes.groupby("condition")["success"].mean()
+    seeds = episodes.groupby("condition")["trial"].nunique()
+    print(f"P(a beats b) = {result['probability']:.2f} [{result['probability_low']:.2f}, "
+          f"{result['probability_high']:.2f}]; pooled success a {pooled['a']:.2f} ({seeds['a']} seeds), "
+          f"b {pooled['b']:.2f} ({seeds['b']} seeds)")
+
+
+if __name__ == "__main__":
+    main()
