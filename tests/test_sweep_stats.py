@@ -42,13 +42,44 @@ def test_bootstrap_interval_brackets_the_mean_and_narrows_with_more_seeds():
     assert one.value == 0.7 and math.isnan(one.low) and one.as_dict("x") == {"x": 0.7}
 
 
-def test_stratified_bootstrap_resamples_within_each_terrain():
-    # terrain A is always solved, terrain B never: every stratified resample keeps both, so the pooled mean is
-    # exactly 0.5 with a zero-width interval, where a bootstrap over the pooled values would spread from 0 to 1
+def test_pooled_bootstrap_keeps_every_terrain():
+    # terrain A is always solved, terrain B never: every resample keeps both, so the pooled mean is exactly 0.5
+    # with a zero-width interval, where a bootstrap over the pooled values would spread from 0 to 1
     est = stats.bootstrap_mean([[1.0, 1.0, 1.0], [0.0, 0.0, 0.0]])
     assert (est.value, est.low, est.high) == (0.5, 0.5, 0.5)
     est = stats.bootstrap_mean([[1.0, 0.8, 0.9], [0.0, 0.1, 0.0]], resamples=2000)
     assert 0.4 < est.low < est.value < est.high < 0.6
+
+
+def test_pooled_bootstrap_resamples_whole_seeds():
+    # seeds that fail on both terrains together: the seed means are 1, 0, 1, 0, so four seeds leave the pooled mean
+    # anywhere in [0, 1]; resampling each terrain on its own would average two independent draws and narrow it
+    together = stats.bootstrap_mean([[1.0, 0.0, 1.0, 0.0], [1.0, 0.0, 1.0, 0.0]], resamples=4000)
+    assert (together.value, together.low, together.high) == (0.5, 0.0, 1.0)
+    # seeds that trade terrains: every seed's mean is 0.5, so every resample of whole seeds is too
+    trade = stats.bootstrap_mean([[1.0, 0.0, 1.0, 0.0], [0.0, 1.0, 0.0, 1.0]], resamples=4000)
+    assert (trade.value, trade.low, trade.high) == (0.5, 0.5, 0.5)
+    iqm = stats.bootstrap_iqm([[1.0, 0.0, 1.0, 0.0], [0.0, 1.0, 0.0, 1.0]], resamples=4000)
+    assert iqm.low <= 0.5 <= iqm.high
+    with pytest.raises(ValueError, match="same seeds"):
+        stats.bootstrap_mean([[1.0, 0.0, 1.0], [1.0, 0.0]])
+
+
+def test_improvement_interval_resamples_whole_seeds_of_each_side():
+    # X's first seed wins on both terrains and its second loses on both; Y sits in between. Whole-seed resamples
+    # include all-winning and all-losing draws, so the interval spans [0, 1]
+    est = stats.bootstrap_improvement([[1.0, 0.0], [1.0, 0.0]], [[0.5, 0.5], [0.5, 0.5]], resamples=4000)
+    assert (est.value, est.low, est.high) == (0.5, 0.0, 1.0)
+    # when X's seeds trade terrains, every resample of X scores the same against a constant Y
+    est = stats.bootstrap_improvement([[1.0, 0.0], [0.0, 1.0]], [[0.5, 0.5], [0.5, 0.5]], resamples=4000)
+    assert (est.value, est.low, est.high) == (0.5, 0.5, 0.5)
+
+
+def test_by_seed_aligns_terrains_on_the_training_seed():
+    a = pd.DataFrame({"train_seed": [2, 0, 1], "success": [0.2, 0.0, 0.1]})
+    b = pd.DataFrame({"train_seed": [0, 1, 2, 3], "success": [1.0, 1.1, 1.2, 1.3]})  # seed 3 lacks terrain a
+    xa, xb = tables.by_seed([a, b])
+    assert xa.tolist() == [0.0, 0.1, 0.2] and xb.tolist() == [1.0, 1.1, 1.2]
 
 
 def test_probability_of_improvement():

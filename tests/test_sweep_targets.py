@@ -147,6 +147,7 @@ def test_report_has_the_targets_section_and_metrics(tmp_path, with_b):
     assert "| success on wide_block | ≥ 0.95 | 1.00 [1.00, 1.00] ✓ | 1.00 [1.00, 1.00] ✓ |" in text
     assert "(block_far)" in text
     assert (tmp_path / "out" / "targets.csv").stat().st_size > 0
+    assert "3 seeds: a bootstrap over so few seeds understates their spread" in text  # 3 < FEW_SEEDS
     assert all(isinstance(v, int | float) and math.isfinite(v) for k, v in metrics.items() if k.startswith("targets/"))
     if with_b:
         assert "| **met** |  | 9 of 9 | 7 of 9 |" in text

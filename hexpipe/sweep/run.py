@@ -14,6 +14,8 @@ from hexpipe.sweep.report import SweepReport, write_report
 from hexpipe.sweep.runner import Outcome, run_trials
 from hexpipe.sweep.store import load_failure
 
+FEW_SEEDS = 6  # below this many seeds the report warns that its intervals are too narrow to decide on
+
 
 def trials_frame(params: Params, trials: list[Trial], outcome: Outcome) -> pd.DataFrame:
     rows = []
@@ -58,7 +60,11 @@ def build_report(params: Params, trials: list[Trial], outcome: Outcome, command:
     if len(set(trials_df["code"].dropna())) > 1:
         notes.append("The trials ran under different hexpipe code (column `code` in trials.csv).")
     if len(cfg.seeds) < 2:
-        notes.append("One seed: no interval over seeds can be computed (use sweep.seeds with at least 3).")
+        notes.append("One seed: no interval over seeds can be computed (use sweep.seeds with at least 6).")
+    elif len(cfg.seeds) < FEW_SEEDS:
+        notes.append(f"{len(cfg.seeds)} seeds: a bootstrap over so few seeds understates their spread (two 3-seed "
+                     "halves of one comparison gave P intervals that exclude each other; reports/experiments/README.md,"
+                     f" \"rollout_forward\"). Read P as a direction, not a decision; use {FEW_SEEDS} or more seeds.")
     return SweepReport(
         name=cfg.name, command=command, conditions=dict(cfg.conditions), seeds=cfg.seeds, terrains=terrains,
         table=table, improvement=tables.improvements(seeds, pairs, terrains, *args), per_seed=seeds,

@@ -2,8 +2,11 @@
 
 Conventions (as in rliable, Agarwal et al. 2021, "Deep RL at the edge of the statistical precipice"):
 - Wilson score interval for a success rate pooled over every episode of every seed (the episode is the unit);
-- percentile bootstrap over training seeds (the seed is the unit), stratified by terrain when terrains are pooled:
-  each terrain's seeds are resampled separately, so every resample keeps every terrain;
+- percentile bootstrap over training seeds (the seed is the unit). Pooled over terrains, a resample draws whole
+  seeds, each with its values on every terrain: one policy is evaluated on all of them, so its terrains rise and
+  fall together. (rliable's stratified bootstrap resamples each task's runs on its own, which suits tasks trained
+  separately; here it gave intervals too narrow: two 3-seed halves of one comparison excluded each other.)
+  Every resample keeps every terrain;
 - IQM: the mean of the middle 50% of per-seed values (scipy's trim_mean at 25%; with fewer than 4 seeds it trims
   nothing and equals the mean);
 - probability of improvement P(X > Y): the Mann-Whitney U statistic over (seed of X, seed of Y) pairs divided by
@@ -53,50 +56,78 @@ def iqm(values: ArrayLike) -> float:
     return float(stats.trim_mean(values, 0.25)) if len(values) else math.nan
 
 
+def _aligned(strata: Sequence[ArrayLike]) -> np.ndarray | None:
+    """(terrains, seeds) matrix of per-seed values; None when empty. Column i must be seed i on every terrain."""
+    samples = [np.asarray(s, dtype=float) for s in strata]
+    if not samples or any(len(s) == 0 for s in samples):
+        return None
+    if len({len(s) for s in samples}) != 1:
+        raise ValueError(f"every terrain needs the same seeds, got {[len(s) for s in samples]} seeds per terrain")
+    return np.stack(samples)
+
+
 def _bootstrap(
-    samples: list[np.ndarray], statistic: Callable[..., np.ndarray], confidence: float, resamples: int, seed: int
+    groups: list[np.ndarray], statistic: Callable[..., np.ndarray], confidence: float, resamples: int, seed: int
 ) -> tuple[float, float]:
-    """Percentile interval of `statistic(*samples, axis=-1)`, each sample resampled on its own (stratified)."""
-    if any(len(s) < 2 for s in samples):
+    """Percentile interval of `statistic(*groups)` over resampled seeds.
+
+    Each group is a (terrains, seeds) matrix. A resample draws whole seeds (columns) of each group, the same columns
+    on every terrain, because one policy is evaluated on every terrain and its terrains rise and fall together;
+    resampling each terrain's seeds on its own would treat them as independent and give too narrow an interval.
+    Groups (the two conditions of a comparison) are resampled independently of each other."""
+    if any(g.shape[-1] < 2 for g in groups):
         return math.nan, math.nan
-    if all(np.all(s == s[0]) for s in samples):  # every resample is the same: a zero-width interval
-        point = float(statistic(*samples, axis=-1))
+    if all(np.all(g == g[:, :1]) for g in groups):  # every resample is the same: a zero-width interval
+        point = float(statistic(*groups))
         return point, point
-    res = stats.bootstrap(tuple(samples), statistic, n_resamples=resamples, vectorized=True, paired=False,
-                          confidence_level=confidence, method="percentile", rng=np.random.default_rng(seed))
+
+    def on_seed_indices(*indices: np.ndarray, axis: int = -1) -> np.ndarray:
+        # indices[k]: (..., seeds) columns of groups[k]; g[:, idx] is (terrains, ..., seeds) -> (..., terrains, seeds)
+        return statistic(*(np.moveaxis(g[:, idx], 0, -2) for g, idx in zip(groups, indices, strict=True)))
+
+    res = stats.bootstrap(tuple(np.arange(g.shape[-1]) for g in groups), on_seed_indices, n_resamples=resamples,
+                          vectorized=True, paired=False, confidence_level=confidence, method="percentile",
+                          rng=np.random.default_rng(seed))
     return float(res.confidence_interval.low), float(res.confidence_interval.high)
 
 
-def _mean_of_means(*samples: np.ndarray, axis: int = -1) -> np.ndarray:
-    return np.mean([np.mean(s, axis=axis) for s in samples], axis=0)
+def _mean_of_means(values: np.ndarray) -> np.ndarray:
+    """(..., terrains, seeds) -> (...): the mean over terrains of the mean over seeds."""
+    return values.mean(axis=-1).mean(axis=-1)
 
 
-def _iqm_of_pooled(*samples: np.ndarray, axis: int = -1) -> np.ndarray:
-    return stats.trim_mean(np.concatenate(samples, axis=axis), 0.25, axis=axis)
+def _iqm_of_pooled(values: np.ndarray) -> np.ndarray:
+    """(..., terrains, seeds) -> (...): the IQM of every (terrain, seed) value pooled."""
+    return stats.trim_mean(values.reshape(*values.shape[:-2], -1), 0.25, axis=-1)
+
+
+def _improvement(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """(..., terrains, seeds_x), (..., terrains, seeds_y) -> (...): P(X > Y) over (x, y) seed pairs, ties counted
+    half, averaged over terrains (the Mann-Whitney U statistic over the number of pairs)."""
+    a, b = x[..., :, None], y[..., None, :]
+    per_terrain = (a > b).mean(axis=(-1, -2)) + 0.5 * (a == b).mean(axis=(-1, -2))
+    return per_terrain.mean(axis=-1)
 
 
 def bootstrap_mean(
     strata: Sequence[ArrayLike], confidence: float = 0.95, resamples: int = 10_000, seed: int = 0
 ) -> Estimate:
-    """Mean over strata of the per-stratum mean of per-seed values, with a stratified bootstrap interval.
-
-    One stratum (one terrain): the plain percentile bootstrap over seeds."""
-    samples = [np.asarray(s, dtype=float) for s in strata]
-    if not samples or any(len(s) == 0 for s in samples):
+    """Mean over strata (terrains) of the per-stratum mean of per-seed values, with a bootstrap interval over whole
+    seeds: strata[t][i] is seed i's value on terrain t. One stratum: the plain percentile bootstrap over seeds."""
+    values = _aligned(strata)
+    if values is None:
         return Estimate(math.nan)
-    value = float(_mean_of_means(*samples))
-    return Estimate(value, *_bootstrap(samples, _mean_of_means, confidence, resamples, seed))
+    return Estimate(float(_mean_of_means(values)), *_bootstrap([values], _mean_of_means, confidence, resamples, seed))
 
 
 def bootstrap_iqm(
     strata: Sequence[ArrayLike], confidence: float = 0.95, resamples: int = 10_000, seed: int = 0
 ) -> Estimate:
-    """IQM of the per-seed values of every stratum pooled, with a stratified bootstrap interval."""
-    samples = [np.asarray(s, dtype=float) for s in strata]
-    if not samples or any(len(s) == 0 for s in samples):
+    """IQM of the per-seed values of every stratum pooled, with a bootstrap interval over whole seeds."""
+    values = _aligned(strata)
+    if values is None:
         return Estimate(math.nan)
-    value = float(_iqm_of_pooled(*samples))
-    return Estimate(value, *_bootstrap(samples, _iqm_of_pooled, confidence, resamples, seed))
+    return Estimate(float(_iqm_of_pooled(values)), *_bootstrap([values], _iqm_of_pooled, confidence, resamples, seed))
 
 
 def probability_of_improvement(x: ArrayLike, y: ArrayLike) -> float:
@@ -110,18 +141,11 @@ def probability_of_improvement(x: ArrayLike, y: ArrayLike) -> float:
 def bootstrap_improvement(
     xs: Sequence[ArrayLike], ys: Sequence[ArrayLike], confidence: float = 0.95, resamples: int = 10_000, seed: int = 0
 ) -> Estimate:
-    """P(X > Y) averaged over terrains (xs[t], ys[t]: per-seed values on terrain t), stratified bootstrap interval."""
+    """P(X > Y) averaged over terrains (xs[t][i], ys[t][i]: seed i's value on terrain t), with a bootstrap interval
+    that resamples whole seeds of X and of Y, independently of each other."""
     if len(xs) != len(ys) or not xs:
         raise ValueError(f"need the same terrains for both conditions, got {len(xs)} and {len(ys)}")
-    samples = [np.asarray(s, dtype=float) for s in (*xs, *ys)]
-    if any(len(s) == 0 for s in samples):
+    x, y = _aligned(xs), _aligned(ys)
+    if x is None or y is None:
         return Estimate(math.nan)
-    k = len(xs)
-
-    def statistic(*parts: np.ndarray, axis: int = -1) -> np.ndarray:
-        per_terrain = [stats.mannwhitneyu(a, b, axis=axis, method="asymptotic").statistic
-                       / (a.shape[axis] * b.shape[axis]) for a, b in zip(parts[:k], parts[k:], strict=True)]
-        return np.mean(per_terrain, axis=0)
-
-    value = float(np.mean([probability_of_improvement(a, b) for a, b in zip(samples[:k], samples[k:], strict=True)]))
-    return Estimate(value, *_bootstrap(samples, statistic, confidence, resamples, seed))
+    return Estimate(float(_improvement(x, y)), *_bootstrap([x, y], _improvement, confidence, resamples, seed))

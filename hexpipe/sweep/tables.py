@@ -69,12 +69,20 @@ def per_seed(episodes: pd.DataFrame) -> pd.DataFrame:
     return episodes.groupby(keys, sort=False)[list(episodes.columns.drop(keys))].apply(one).reset_index()
 
 
+def by_seed(frames: Sequence[pd.DataFrame], column: str = "success") -> list[np.ndarray]:
+    """`column` of each per-seed frame (one per terrain), for the training seeds that every frame holds, in seed
+    order: entry i of every array is the same seed, as the bootstrap over whole seeds needs."""
+    common = sorted(set.intersection(*(set(f["train_seed"]) for f in frames))) if frames else []
+    return [f.drop_duplicates("train_seed").set_index("train_seed").loc[common, column].to_numpy(float)
+            for f in frames]
+
+
 def _cell(seeds: list[pd.DataFrame], confidence: float, resamples: int, seed: int) -> Cell:
     """Statistics of one condition over one or more terrains (one per-seed frame per terrain = stratum)."""
     successes = sum(int(s["successes"].sum()) for s in seeds)
     episodes = sum(int(s["episodes"].sum()) for s in seeds)
-    success = [s["success"].to_numpy(float) for s in seeds]
-    out: Cell = {"episodes": episodes, "seeds": min(len(s) for s in seeds)}
+    success = by_seed(seeds)
+    out: Cell = {"episodes": episodes, "seeds": len(success[0])}
     out |= stats.wilson(successes, episodes, confidence).as_dict("success_rate")
     out |= stats.bootstrap_mean(success, confidence, resamples, seed).as_dict("success_seed_mean")
     out |= stats.bootstrap_iqm(success, confidence, resamples, seed).as_dict("success_iqm")
@@ -118,16 +126,17 @@ def improvements(
     """{"a_vs_b": {terrain: {probability, low, high}, "all": ...}}: P(a's per-seed success > b's)."""
     out: dict[str, dict[str, Cell]] = {}
     for a, b in pairs:
-        xs, ys, names = [], [], []
+        fx, fy, names = [], [], []
         for terrain in terrains:
-            x = seeds[(seeds["condition"] == a) & (seeds["terrain"] == terrain)]["success"].to_numpy(float)
-            y = seeds[(seeds["condition"] == b) & (seeds["terrain"] == terrain)]["success"].to_numpy(float)
+            x = seeds[(seeds["condition"] == a) & (seeds["terrain"] == terrain)]
+            y = seeds[(seeds["condition"] == b) & (seeds["terrain"] == terrain)]
             if len(x) and len(y):
-                xs.append(x)
-                ys.append(y)
+                fx.append(x)
+                fy.append(y)
                 names.append(terrain)
         if not names:
             continue
+        xs, ys = by_seed(fx), by_seed(fy)
         row = {t: stats.bootstrap_improvement([x], [y], confidence, resamples, seed).as_dict("probability")
                for t, x, y in zip(names, xs, ys, strict=True)}
         if len(names) > 1:
