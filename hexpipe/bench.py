@@ -152,13 +152,11 @@ def forward_cost(params: Params, calls: int = 2000) -> dict[str, float]:
     from gymnasium import spaces
     from stable_baselines3.common.policies import ActorCriticPolicy
 
-    from hexpipe.rl.features import PROPRIOCEPTIVE_KEYS
+    from hexpipe.rl.policy import feature_dim
     from hexpipe.rl.rollout import RolloutPolicy
 
     torch.set_num_threads(1)
-    body = HexapodEnv.observation_spec(params, obs_sensors=()).spaces
-    dim = sum(int(np.prod(body[k].shape)) for k in PROPRIOCEPTIVE_KEYS)
-    dim += 0 if params.ppo.blind else params.vae.latent_dim
+    dim = feature_dim(params, 0 if params.ppo.blind else params.vae.latent_dim)
     space = spaces.Box(-np.inf, np.inf, shape=(dim,), dtype=np.float32)
     policy = RolloutPolicy(space, spaces.Box(-1, 1, (3,)), lr_schedule=lambda _: 0.0,
                            net_arch=list(params.ppo.net_arch))

@@ -32,7 +32,7 @@ from gymnasium import spaces
 
 from hexpipe import sensors as registry
 from hexpipe.config import CpgConfig, Params, SensorConfig, SimConfig, TaskConfig
-from hexpipe.envs.privileged import PRIVILEGED, privileged_space, privileged_vector
+from hexpipe.envs.privileged import PRIVILEGED, corridor_columns, privileged_space, privileged_vector
 from hexpipe.envs.rewards import failure_penalty, forward_velocity_reward, power_penalty
 from hexpipe.envs.state import WORLD_FRAME, EnvScene, EnvState
 from hexpipe.sensors.heightmap import HEADING_FRAME, quat_to_yaw
@@ -126,6 +126,7 @@ class HexapodEnv(gym.Env):
         # what one observation reads: the observed sensors, and the height map for the privileged profile
         self._sensed = self._observed + (["heightmap"] if privileged and "heightmap" not in self._observed else [])
         self._physics = (self.sim_cfg.friction, 1.0)  # (friction, base-mass scale) drawn at reset
+        self._corridor = corridor_columns(self.sensor_cfg) if privileged else None
         self._accel_limit = np.asarray(self.cpg_cfg.accel_limit)
         self._max_joint_step = self.robot_spec.speeds * self.physics_dt
         self.terrain: Terrain | None = None
@@ -266,7 +267,7 @@ class HexapodEnv(gym.Env):
         for name in self._observed:
             obs[name] = registry.get(name).observation(sensed[name])
         if self.privileged:
-            obs[PRIVILEGED] = privileged_vector(sensed["heightmap"], *self._physics, self.sensor_cfg)
+            obs[PRIVILEGED] = privileged_vector(sensed["heightmap"], *self._physics, self.sensor_cfg, self._corridor)
         return obs
 
     def sense(self, names: Iterable[str], base: tuple[np.ndarray, np.ndarray] | None = None) -> dict[str, np.ndarray]:

@@ -40,13 +40,16 @@ def corridor_columns(sensors: SensorConfig) -> np.ndarray:
     return inside if inside.any() else np.ones_like(inside)
 
 
-def privileged_vector(heightmap: np.ndarray, friction: float, mass_scale: float, sensors: SensorConfig) -> np.ndarray:
+def privileged_vector(
+    heightmap: np.ndarray, friction: float, mass_scale: float, sensors: SensorConfig, columns: np.ndarray | None = None
+) -> np.ndarray:
     """(rows + 2,) float32: the highest terrain (m above the stance plane) in each height-map row across the legs'
     corridor, from the map's near edge (behind the hind feet) to its far edge, then friction and the base-mass scale.
 
     heightmap: one reading, (rows, cols) or flattened, as the height-map sensor gives it.
+    columns: corridor_columns(sensors), passed by a caller that computed it once.
     """
     grid = np.asarray(heightmap, dtype=np.float32).reshape(sensors.heightmap_rows, sensors.heightmap_cols)
-    profile = grid[:, corridor_columns(sensors)].max(axis=1)
+    profile = grid[:, corridor_columns(sensors) if columns is None else columns].max(axis=1)
     vector = np.concatenate([profile, np.array([friction, mass_scale], dtype=np.float32)])
     return np.clip(vector, -LIMIT_M, LIMIT_M).astype(np.float32)

@@ -114,7 +114,7 @@ def load_policy(
         )
     encoder = None if blind else _load_matching_encoder(directory, config, params)
     dim = int(config["observation_dim"])
-    produced = _feature_dim(params, encoder)
+    produced = feature_dim(params, 0 if encoder is None else encoder.latent_dim)
     if produced != dim:
         raise PolicyError(
             f"{directory}: policy expects {dim} input features (policy.json observation_dim), but the env and "
@@ -200,13 +200,14 @@ def _load_matching_encoder(directory: Path, config: dict[str, Any], params: Para
     return encoder
 
 
-def _feature_dim(params: Params, encoder: Encoder | None) -> int:
-    """Length of the feature vector the env (its observation space now) and encoder produce."""
+def feature_dim(params: Params, latent_dim: int) -> int:
+    """Length of the policy's input: the env's proprioceptive keys (its observation space now) and the terrain
+    encoder's latent_dim (0 for a blind policy)."""
     from hexpipe.envs.hexapod import HexapodEnv
 
     spaces = HexapodEnv.observation_spec(params, obs_sensors=()).spaces
     dim = sum(int(np.prod(spaces[k].shape)) for k in PROPRIOCEPTIVE_KEYS)
-    return dim + (0 if encoder is None else encoder.latent_dim)
+    return dim + latent_dim
 
 
 def _drift(config: dict[str, Any], params: Params) -> list[str]:
