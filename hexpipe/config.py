@@ -255,9 +255,9 @@ class PpoConfig(_Section):
     # an asymmetric critic: the value network also sees the true terrain profile and the randomised physics
     # (hexpipe/envs/privileged.py); the actor, and so the exported policy, keeps its inputs
     privileged_critic: bool = False
-    # the policy's forward pass while collecting: SB3's torch one, or the same network in numpy (hexpipe/rl/rollout.py,
-    # a faster learner on 2 cores; other random draws, so other runs than torch's for the same seed)
-    rollout_forward: Literal["torch", "numpy"] = "torch"
+    # the policy's forward pass while collecting: the same network in numpy (hexpipe/rl/rollout.py, a faster learner
+    # on 2 cores), or SB3's torch one (other random draws, so other runs than numpy's for the same seed)
+    rollout_forward: Literal["torch", "numpy"] = "numpy"
     checkpoint_every: PositiveInt = 20_000
     encoder_dir: str = "data/models/vae"
     out_dir: str = "data/models/ppo"
