@@ -4,11 +4,17 @@ Why: a plain VAE spends its 8 dims on reconstruction. The rise ahead is in the l
 0.55 for its distance and 0.04 for its height on the 100-episode pilot data, kNN 0.83 and 0.64), while the gait needs
 it readable. A linear head on mu, trained with the VAE at weight `vae.feature_weight`, pulls these quantities onto
 linear directions of the latent. The head is not exported: the frozen encoder still returns the 8-d mean.
+
+With `vae.profile_weight` > 0 the head also predicts the terrain profile: the highest cell in each of
+`vae.profile_bands` equal bands of the map's rows, across the legs' corridor. Why: the rise targets are all ahead,
+and the latent carried the band under the hind feet worst (reports/experiments/band_probe.py), while a policy that
+lowers its feet with its hind legs still on a block gets stuck there (reports/experiments/collapse_trace.py).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from itertools import pairwise
 
 import numpy as np
 import torch
@@ -54,12 +60,31 @@ def rise_targets(distance: np.ndarray, height: np.ndarray, scale: RiseScale) -> 
     return torch.from_numpy(out.astype(np.float32))
 
 
-class RiseHead(nn.Linear):
-    """Linear map latent mean -> (distance, height, in-range logit): linear, because a linear read-out is what the
-    ridge probes measure and what the policy's first layer sees."""
+def terrain_profile(images: np.ndarray, bands: int, corridor: float) -> np.ndarray:
+    """(N, bands) float32: the highest value of each band of image rows (bands from the map's near edge, behind the
+    base, to its far edge) across the central `corridor` fraction of the columns, from preprocessed height maps
+    (N, 1, S, S) in [0, 1] (rows run forward, as the height-map sensor's)."""
+    images = np.asarray(images)
+    size, cols = images.shape[-2], images.shape[-1]
+    keep = max(1, round(corridor * cols))
+    first = (cols - keep) // 2
+    strip = images[:, 0, :, first : first + keep].max(axis=-1).astype(np.float32)  # (N, rows)
+    edges = np.linspace(0, size, bands + 1).round().astype(int)
+    return np.stack([strip[:, a:b].max(axis=1) for a, b in pairwise(edges)], axis=1)
 
-    def __init__(self, latent_dim: int) -> None:
-        super().__init__(latent_dim, 3)
+
+def standardise(values: np.ndarray, fit_on: np.ndarray) -> Tensor:
+    """(N, K) values standardised per column with the mean and std of the rows `fit_on` (the training frames)."""
+    mean, std = values[fit_on].mean(axis=0), values[fit_on].std(axis=0) + 1e-6
+    return torch.from_numpy(((values - mean) / std).astype(np.float32))
+
+
+class RiseHead(nn.Linear):
+    """Linear map latent mean -> (distance, height, in-range logit, then `profile_bands` band heights): linear,
+    because a linear read-out is what the ridge probes measure and what the policy's first layer sees."""
+
+    def __init__(self, latent_dim: int, profile_bands: int = 0) -> None:
+        super().__init__(latent_dim, 3 + profile_bands)
 
 
 def rise_loss(predicted: Tensor, targets: Tensor) -> Tensor:
@@ -73,4 +98,10 @@ def rise_loss(predicted: Tensor, targets: Tensor) -> Tensor:
     return per_frame.sum() / max(1, len(targets))
 
 
-__all__ = ["RiseHead", "RiseScale", "rise_loss", "rise_targets"]
+def profile_loss(predicted: Tensor, targets: Tensor) -> Tensor:
+    """Squared error on the standardised band heights, summed per image and averaged over the batch: each band
+    weighs as much as the rise's distance or height."""
+    return (predicted - targets).pow(2).sum() / max(1, len(targets))
+
+
+__all__ = ["RiseHead", "RiseScale", "profile_loss", "rise_loss", "rise_targets", "standardise", "terrain_profile"]

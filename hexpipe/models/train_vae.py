@@ -33,8 +33,16 @@ from rich.progress import (
 
 from hexpipe.atomic import atomic_path
 from hexpipe.config import VaeConfig
-from hexpipe.models.probes import PROBE_DISTANCE_M, active_dims, knn_accuracy, linear_probe, rise_probes
-from hexpipe.models.rise_head import RiseHead, RiseScale, rise_loss, rise_targets
+from hexpipe.models.probes import PROBE_DISTANCE_M, active_dims, knn_accuracy, linear_probe, ridge_r2, rise_probes
+from hexpipe.models.rise_head import (
+    RiseHead,
+    RiseScale,
+    profile_loss,
+    rise_loss,
+    rise_targets,
+    standardise,
+    terrain_profile,
+)
 from hexpipe.models.vae import (
     DEFAULT_CHANNELS,
     ConvVAE,
@@ -74,16 +82,23 @@ def objective(
     head: RiseHead | None = None,
     targets: torch.Tensor | None = None,
     weight: float = 0.0,
+    profile_weight: float = 0.0,
 ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor]:
-    """Per-image (loss, recon, kl, rise) of batch x: loss = recon + beta * KL + weight * rise, where rise is the
-    aux head's `rise_loss` on the latent means against `targets` (0 without a head or at weight 0, and then
-    loss is exactly the plain VAE loss)."""
+    """Per-image (loss, recon, kl, rise) of batch x: loss = recon + beta * KL + weight * rise + profile_weight *
+    profile, where rise is the aux head's `rise_loss` on the latent means against `targets` and profile its
+    `profile_loss` on the band heights after them (the 4th term returned is rise + profile). Without a head or at
+    zero weights, loss is exactly the plain VAE loss."""
     recon, mu, logvar = model(x, noise)
     loss = vae_loss(recon, x, mu, logvar, beta)
-    if head is None or targets is None or weight == 0:
+    if head is None or targets is None or (weight == 0 and profile_weight == 0):
         return loss.total, loss.recon, loss.kl, torch.zeros(())
-    rise = rise_loss(head(mu), targets)
-    return loss.total + weight * rise, loss.recon, loss.kl, rise
+    predicted = head(mu)
+    rise = rise_loss(predicted, targets)
+    total = loss.total + weight * rise
+    if profile_weight > 0:
+        profile = profile_loss(predicted[:, 3:], targets[:, 3:])
+        total, rise = total + profile_weight * profile, rise + profile
+    return total, loss.recon, loss.kl, rise
 
 
 def train_step(
@@ -95,9 +110,10 @@ def train_step(
     head: RiseHead | None = None,
     targets: torch.Tensor | None = None,
     weight: float = 0.0,
+    profile_weight: float = 0.0,
 ) -> tuple[float, float, float, float]:
     """One optimiser step on batch x (and the head, if any); returns per-image (loss, recon, kl, rise)."""
-    terms = objective(model, x, beta, noise, head, targets, weight)
+    terms = objective(model, x, beta, noise, head, targets, weight, profile_weight)
     optimizer.zero_grad(set_to_none=True)
     terms[0].backward()
     optimizer.step()
@@ -115,6 +131,7 @@ def evaluate(
     head: RiseHead | None = None,
     targets: torch.Tensor | None = None,
     weight: float = 0.0,
+    profile_weight: float = 0.0,
 ) -> dict[str, float]:
     """Mean per-image recon / KL / loss (and the head's rise loss) on `idx`, with z sampled from a fixed-seed
     generator (comparable across epochs and to the training figures). `targets` covers all frames of `data`."""
@@ -124,7 +141,8 @@ def evaluate(
     for start in range(0, len(idx), _EVAL_BATCH):
         batch = idx[start : start + _EVAL_BATCH]
         x = data.batch(batch)
-        terms = objective(model, x, beta, noise, head, None if targets is None else targets[batch], weight)
+        terms = objective(model, x, beta, noise, head, None if targets is None else targets[batch], weight,
+                          profile_weight)
         totals += len(x) * np.array([t.item() for t in terms])
     model.train()
     loss_m, recon_m, kl_m, rise_m = totals / max(1, len(idx))
@@ -220,7 +238,7 @@ def _train_epoch(
         x = data.batch(batch)
         args = (model, optimizer, x, cfg.beta, noise)
         if head is not None and targets is not None:
-            args += (head, targets[batch], cfg.feature_weight)
+            args += (head, targets[batch], cfg.feature_weight, cfg.profile_weight)
         sums += len(x) * np.array(train_step(*args))
         busy += time.perf_counter() - tic
         seen += len(x)
@@ -255,12 +273,17 @@ def train_vae(cfg: VaeConfig, frames: Iterable[Frame] | None = None) -> dict[str
     out_dir.mkdir(parents=True, exist_ok=True)
     torch.manual_seed(cfg.seed)
     model = ConvVAE(channels_for(cfg.modality), cfg.image_size, cfg.latent_dim).to(memory_format=torch.channels_last)
-    # The aux head exists only at feature_weight > 0, so that 0 is the plain VAE to the bit (same init, same steps).
-    head = RiseHead(cfg.latent_dim) if cfg.feature_weight > 0 else None
+    # The aux head exists only at a weight > 0, so that 0 is the plain VAE to the bit (same init, same steps); its
+    # profile outputs only at profile_weight > 0, so that 0 is the rise head alone to the bit.
+    bands = cfg.profile_bands if cfg.profile_weight > 0 else 0
+    head = RiseHead(cfg.latent_dim, bands) if cfg.feature_weight > 0 or bands else None
     targets = None
     if head is not None:
         scale = RiseScale.fit(data.rise_distance[train_idx], data.rise_height[train_idx])
         targets = rise_targets(data.rise_distance, data.rise_height, scale)
+        if bands:
+            profile = terrain_profile(data.images, bands, cfg.profile_corridor)
+            targets = torch.cat([targets, standardise(profile, train_idx)], dim=1)
     epoch_keys = _EPOCH_KEYS + (_RISE_KEYS if head is not None else ())
     params = [*model.parameters(), *(head.parameters() if head is not None else ())]
     optimizer = torch.optim.Adam(params, lr=cfg.learning_rate)
@@ -291,7 +314,8 @@ def train_vae(cfg: VaeConfig, frames: Iterable[Frame] | None = None) -> dict[str
     with _progress(console) as progress:
         for epoch in range(len(history) + 1, cfg.epochs + 1):
             row = _train_epoch(model, optimizer, data, train_idx, cfg, shuffle, noise, progress, epoch, head, targets)
-            val = evaluate(model, data, val_idx, cfg.beta, cfg.seed + 2, head, targets, cfg.feature_weight)
+            val = evaluate(model, data, val_idx, cfg.beta, cfg.seed + 2, head, targets, cfg.feature_weight,
+                           cfg.profile_weight)
             row |= {f"val/{k}": v for k, v in val.items()}
             history.append(row)
             for name in epoch_keys:
@@ -340,6 +364,11 @@ def train_vae(cfg: VaeConfig, frames: Iterable[Frame] | None = None) -> dict[str
     train_rise = (data.rise_distance[train_idx], data.rise_height[train_idx])
     val_rise = (data.rise_distance[val_idx], data.rise_height[val_idx])
     rise = rise_probes(train_mu, train_rise, val_mu, val_rise)
+    band_r2: dict[str, float] = {}
+    if cfg.modality == "heightmap":  # what the latent carries of each band of the map, rear (band 0) to front
+        bands = terrain_profile(data.images, cfg.profile_bands, cfg.profile_corridor)
+        band_r2 = {f"probe/profile_r2/band{k}": ridge_r2(train_mu, bands[train_idx, k], val_mu, bands[val_idx, k])
+                   for k in range(cfg.profile_bands)}
     live.log_image("recon_grid.png", recon_grid(model, data, val_idx))
     live.log_image("latent_map.png", latent_map(val_mu, block_ahead[val_idx]))
     live.log_image("rise_probes.png", rise_probe_figure(train_mu, train_rise, val_mu, val_rise, rise))
@@ -355,6 +384,7 @@ def train_vae(cfg: VaeConfig, frames: Iterable[Frame] | None = None) -> dict[str
         "probe_knn_accuracy": knn_accuracy(train_mu, block_ahead[train_idx], val_mu, block_ahead[val_idx]),
         "latent/active_dims": active_dims(val_mu),
         **{f"probe/{name}": value for name, value in rise.items()},
+        **band_r2,
         "data/train_frames": len(train_idx),
         "data/val_frames": len(val_idx),
         "data/val_episodes": n_val_eps,
@@ -370,7 +400,8 @@ def train_vae(cfg: VaeConfig, frames: Iterable[Frame] | None = None) -> dict[str
         f"probe {probe_accuracy:.3f} vs baseline {probe_baseline:.3f} (threshold probe {threshold_accuracy:.3f}); "
         f"rise probes R² distance {rise['rise_distance_r2']:.3f}, height {rise['rise_height_r2']:.3f} "
         f"(kNN {rise['rise_distance_knn_r2']:.3f}, {rise['rise_height_knn_r2']:.3f}); "
-        f"{metrics['latent/active_dims']}/{cfg.latent_dim} active latent dims; "
+        + (f"profile R² rear to front {' '.join(f'{v:.2f}' for v in band_r2.values())}; " if band_r2 else "")
+        + f"{metrics['latent/active_dims']}/{cfg.latent_dim} active latent dims; "
         f"{metrics['train/images_per_s']:.0f} images/s; encoder -> {out_dir}"
     )
     return metrics
