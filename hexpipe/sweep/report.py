@@ -242,7 +242,7 @@ def markdown(report: SweepReport, front: list[str] | None) -> str:
         "## Success, time to goal and cost of transport\n\n"
         f"Intervals are {level}. **success (episodes)**: every episode of every seed pooled, Wilson score interval "
         "(how sure we are of this exact set of policies). **success (seeds)**: mean over training seeds of each "
-        "seed's success rate, percentile bootstrap over seeds, stratified by terrain on the `all` rows (how sure we "
+        "seed's success rate, percentile bootstrap over seeds, resampling whole seeds on the `all` rows (how sure we "
         "are of the training recipe: this is the one to compare conditions with). **IQM**: interquartile mean of "
         "the per-seed success rates (the plain mean below 4 seeds), bootstrap interval. Time to goal (s) and cost of "
         "transport: means over seeds of each seed's mean over the episodes that reached the goal, bootstrap over "
@@ -265,7 +265,7 @@ def markdown(report: SweepReport, front: list[str] | None) -> str:
         parts.append(
             "## Probability of improvement\n\nP(a > b): the chance that a seed of condition a has a higher success "
             "rate than a seed of condition b (ties count half; Mann-Whitney U over seed pairs, averaged over terrains "
-            f"on the `all` row), with a {level} stratified bootstrap interval. 0.5 = no difference.\n\n"
+            f"on the `all` row), with a {level} bootstrap interval over whole seeds. 0.5 = no difference.\n\n"
             + _table(("a > b", "terrain", "probability"), improvement))
     figures = ["![success per terrain](success.png)"]
     if front is not None:

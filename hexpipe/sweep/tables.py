@@ -1,7 +1,8 @@
 """Trial records -> the sweep's tables: every evaluated episode, and per (condition, terrain) statistics.
 
 Pure functions on DataFrames and dicts (no files); the intervals come from hexpipe.sweep.stats. A condition's
-seeds are the trials of it that completed; a terrain's "all" row pools the terrains of the suite (stratified).
+seeds are the trials of it that completed; a terrain's "all" row pools the terrains of the suite, each seed with
+its results on every terrain (`by_seed`).
 Issue 10's targets are judged per condition on the policy's per-seed figures (thresholds in
 hexpipe.evaluation.metrics).
 """
