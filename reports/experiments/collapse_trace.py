@@ -44,7 +44,8 @@ def episode(policy, seed: int) -> str:
     trace = np.array(trace)
     last = trace[-max(1, round(LAST_S / env.control_dt)):]
     edge = trace[(trace[:, 0] > rear) & (trace[:, 0] <= rear + REAR_EDGE_M), 2]
-    out = (f"  seed {seed}: {info['termination']:5s} at {info['distance']:.2f} m (block {face:.1f}-{rear:.1f} m); "
+    ended = info["termination"] or "time limit"
+    out = (f"  seed {seed}: {ended:5s} at {info['distance']:.2f} m (block {face:.1f}-{rear:.1f} m); "
            f"last {LAST_S:.0f} s: a {last[:, 1].mean():.2f} b {last[:, 2].mean():.2f}; "
            f"b over the rear edge {edge.mean() if len(edge) else float('nan'):.2f}; "
            f"feet {feet_where(env, (face, rear), height)}")
