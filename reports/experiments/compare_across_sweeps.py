@@ -4,6 +4,8 @@ whose trials ran in different sweeps: each side pools the records of one or more
     .venv/bin/python reports/experiments/compare_across_sweeps.py \
         --a reports/sweeps/levers:default --a reports/sweeps/forward:numpy \
         --b reports/sweeps/privileged:default --b reports/sweeps/forward:torch
+
+--stalls adds the failed episodes on the block courses, counted by where the feet were when each ended.
 """
 
 import argparse
@@ -11,6 +13,11 @@ import json
 from pathlib import Path
 
 from hexpipe.sweep.tables import LEARNED, episodes_frame, improvements, per_seed
+
+BLOCK_COURSES = ("single_block", "extra_blocks", "wide_block", "tall_block", "block_near", "block_far")
+# stall_legs "none": stuck or fallen with no foot at a block face (on or past a block); "-": the episode ran out
+# of time (no stall recorded); anything else names the legs with a foot at a face
+STALL_KIND = {"none": "no foot at a face", "-": "time limit", "": "time limit"}
 
 
 def records(sources: list[str], name: str) -> list[dict]:
@@ -26,6 +33,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--a", action="append", required=True, help="SWEEP_FOLDER:CONDITION (repeatable)")
     parser.add_argument("--b", action="append", required=True, help="SWEEP_FOLDER:CONDITION (repeatable)")
+    parser.add_argument("--stalls", action="store_true", help="also count the failed episodes on the block courses "
+                        "by where the feet were (evaluate's stall_legs)")
     args = parser.parse_args()
     episodes = episodes_frame(records(args.a, "a") + records(args.b, "b"))
     episodes = episodes[episodes["controller"] == LEARNED]
@@ -36,6 +45,12 @@ def main() -> None:
     print(f"P(a beats b) = {result['probability']:.2f} [{result['probability_low']:.2f}, "
           f"{result['probability_high']:.2f}]; pooled success a {pooled['a']:.2f} ({seeds['a']} seeds), "
           f"b {pooled['b']:.2f} ({seeds['b']} seeds)")
+    if args.stalls:
+        failed = episodes[~episodes["success"] & episodes["terrain"].isin(BLOCK_COURSES)]
+        where = failed["stall_legs"].fillna("-").map(lambda legs: STALL_KIND.get(legs, "a foot at a face"))
+        table = failed.groupby([failed["condition"], where]).size().unstack(fill_value=0)
+        print(f"failed episodes on {', '.join(BLOCK_COURSES)}, by where the feet were:")
+        print(table.to_string())
 
 
 if __name__ == "__main__":
