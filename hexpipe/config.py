@@ -321,7 +321,7 @@ class SweepConfig(_Section):
     """
 
     name: Annotated[str, Field(pattern=_NAME)] = "main"  # data_dir/NAME and report_dir/NAME
-    seeds: Annotated[tuple[int, ...], Field(min_length=1)] = (0, 1, 2)  # training seeds (ppo.seed)
+    seeds: Annotated[tuple[int, ...], Field(min_length=1)] = (0, 1, 2, 3, 4, 5)  # training seeds (ppo.seed)
     conditions: dict[Annotated[str, Field(pattern=_NAME)], tuple[str, ...]] = {
         "default": (), "blind": ("ppo.blind=true",),
     }

@@ -135,7 +135,7 @@ def probability_of_improvement(x: ArrayLike, y: ArrayLike) -> float:
     x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
     if not len(x) or not len(y):
         return math.nan
-    return float(stats.mannwhitneyu(x, y).statistic) / (len(x) * len(y))
+    return float(_improvement(x[None], y[None]))
 
 
 def bootstrap_improvement(
