@@ -17,6 +17,14 @@ from hexpipe.speed import SPEED_JSON, beside, read_with_speed
 VAE_HEADLINES = ("probe_accuracy", "probe_baseline", "probe_threshold_accuracy", "probe_knn_accuracy", "epochs")
 
 
+def _flatten(values: dict[str, Any], prefix: str) -> dict[str, Any]:
+    """{"a": {"b": 1}} -> {prefix + "a/b": 1}: one table row per number, at any depth."""
+    out: dict[str, Any] = {}
+    for key, value in values.items():
+        out |= _flatten(value, f"{prefix}{key}/") if isinstance(value, dict) else {f"{prefix}{key}": value}
+    return out
+
+
 def _read(path: Path) -> dict[str, Any] | None:
     return json.loads(path.read_text()) if path.is_file() else None
 
@@ -63,7 +71,7 @@ def build_summary(params: Params, collect_report: Path, root: Path) -> str:
     else:
         flat = {**{f"val/{k}": v for k, v in vae.get("val", {}).items()},
                 **{k: vae[k] for k in VAE_HEADLINES if k in vae},
-                **{f"probe/{k}": v for k, v in vae.get("probe", {}).items()},  # rise distance / height R²
+                **_flatten(vae.get("probe", {}), "probe/"),  # rise distance / height R², R² per profile band
                 "train/images_per_s": vae.get("train", {}).get("images_per_s")}
         vae_cfg = params.vae
         lines += [f"Modality: `{vae_cfg.modality}`, latent size {vae_cfg.latent_dim}, beta {vae_cfg.beta}.", "",

@@ -31,7 +31,8 @@ def test_summary_page_shows_speed_from_the_speed_files(tmp_path):
     from hexpipe.summary import build_summary
 
     files = {"collect.json": {"episodes": 3}, "collect_speed.json": {"frames_per_s": 123.0},
-             "vae/metrics.json": {"val": {"loss": 1.5}, "train": {"loss": 1.0}},
+             "vae/metrics.json": {"val": {"loss": 1.5}, "train": {"loss": 1.0},
+                                  "probe": {"rise_distance_r2": 0.9, "profile_r2": {"band0": 0.25}}},
              "vae/speed.json": {"train": {"images_per_s": 456.0}},
              "ppo/metrics.json": {"step": 10, "episode": {"success_rate": 0.5}},
              "ppo/speed.json": {"time": {"train_steps_per_s": 789.0}}}
@@ -44,5 +45,6 @@ def test_summary_page_shows_speed_from_the_speed_files(tmp_path):
         "eval": Params().eval.model_copy(update={"report_dir": str(tmp_path / "eval")})})
     page = build_summary(params, tmp_path / "collect.json", tmp_path)
     for row in ("| frames_per_s | 123 |", "| train/images_per_s | 456 |", "| time/train_steps_per_s | 789 |",
-                "| episode/success_rate | 0.5 |", "| val/loss | 1.5 |"):
+                "| episode/success_rate | 0.5 |", "| val/loss | 1.5 |", "| probe/rise_distance_r2 | 0.9 |",
+                "| probe/profile_r2/band0 | 0.25 |"):  # nested metrics get a row each
         assert row in page
