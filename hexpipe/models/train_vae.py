@@ -273,16 +273,20 @@ def train_vae(cfg: VaeConfig, frames: Iterable[Frame] | None = None) -> dict[str
     out_dir.mkdir(parents=True, exist_ok=True)
     torch.manual_seed(cfg.seed)
     model = ConvVAE(channels_for(cfg.modality), cfg.image_size, cfg.latent_dim).to(memory_format=torch.channels_last)
+    # The terrain profile per band (height maps only): the report's per-band probes, and the head's extra targets
+    # at profile_weight > 0 (the config allows that for height maps only).
+    profile = (terrain_profile(data.images, cfg.profile_bands, cfg.profile_corridor)
+               if cfg.modality == "heightmap" else None)
+    learn_profile = cfg.profile_weight > 0
     # The aux head exists only at a weight > 0, so that 0 is the plain VAE to the bit (same init, same steps); its
     # profile outputs only at profile_weight > 0, so that 0 is the rise head alone to the bit.
-    bands = cfg.profile_bands if cfg.profile_weight > 0 else 0
-    head = RiseHead(cfg.latent_dim, bands) if cfg.feature_weight > 0 or bands else None
+    head = (RiseHead(cfg.latent_dim, cfg.profile_bands if learn_profile else 0)
+            if cfg.feature_weight > 0 or learn_profile else None)
     targets = None
     if head is not None:
         scale = RiseScale.fit(data.rise_distance[train_idx], data.rise_height[train_idx])
         targets = rise_targets(data.rise_distance, data.rise_height, scale)
-        if bands:
-            profile = terrain_profile(data.images, bands, cfg.profile_corridor)
+        if learn_profile and profile is not None:
             targets = torch.cat([targets, standardise(profile, train_idx)], dim=1)
     epoch_keys = _EPOCH_KEYS + (_RISE_KEYS if head is not None else ())
     params = [*model.parameters(), *(head.parameters() if head is not None else ())]
@@ -364,11 +368,10 @@ def train_vae(cfg: VaeConfig, frames: Iterable[Frame] | None = None) -> dict[str
     train_rise = (data.rise_distance[train_idx], data.rise_height[train_idx])
     val_rise = (data.rise_distance[val_idx], data.rise_height[val_idx])
     rise = rise_probes(train_mu, train_rise, val_mu, val_rise)
-    band_r2: dict[str, float] = {}
-    if cfg.modality == "heightmap":  # what the latent carries of each band of the map, rear (band 0) to front
-        bands = terrain_profile(data.images, cfg.profile_bands, cfg.profile_corridor)
-        band_r2 = {f"probe/profile_r2/band{k}": ridge_r2(train_mu, bands[train_idx, k], val_mu, bands[val_idx, k])
-                   for k in range(cfg.profile_bands)}
+    # what the latent carries of each band of the map, rear (band 0) to front
+    band_r2 = {} if profile is None else {
+        f"probe/profile_r2/band{k}": ridge_r2(train_mu, profile[train_idx, k], val_mu, profile[val_idx, k])
+        for k in range(cfg.profile_bands)}
     live.log_image("recon_grid.png", recon_grid(model, data, val_idx))
     live.log_image("latent_map.png", latent_map(val_mu, block_ahead[val_idx]))
     live.log_image("rise_probes.png", rise_probe_figure(train_mu, train_rise, val_mu, val_rise, rise))

@@ -71,11 +71,11 @@ def per_seed(episodes: pd.DataFrame) -> pd.DataFrame:
 
 
 def by_seed(frames: Sequence[pd.DataFrame], column: str = "success") -> list[np.ndarray]:
-    """`column` of each per-seed frame (one per terrain), for the training seeds that every frame holds, in seed
-    order: entry i of every array is the same seed, as the bootstrap over whole seeds needs."""
+    """`column` of each per-seed frame (one per terrain, a row per training seed, as `per_seed` gives), for the
+    training seeds that every frame holds, in seed order: entry i of every array is the same seed, as the bootstrap
+    over whole seeds needs."""
     common = sorted(set.intersection(*(set(f["train_seed"]) for f in frames))) if frames else []
-    return [f.drop_duplicates("train_seed").set_index("train_seed").loc[common, column].to_numpy(float)
-            for f in frames]
+    return [f.set_index("train_seed").loc[common, column].to_numpy(float) for f in frames]
 
 
 def _cell(seeds: list[pd.DataFrame], confidence: float, resamples: int, seed: int) -> Cell:

@@ -21,11 +21,20 @@ STALL_KIND = {"none": "no foot at a face", "-": "time limit", "": "time limit"}
 
 
 def records(sources: list[str], name: str) -> list[dict]:
-    out = []
+    """Every trial record of the sources, as condition `name`; a training seed found in two sources is an error
+    (the per-seed statistics would merge the two policies into one seed)."""
+    out, seen = [], {}
     for source in sources:
         folder, _, condition = source.rpartition(":")
         for path in sorted(Path(folder).glob(f"{condition}-seed*/result.json")):
-            out.append({**json.loads(path.read_text()), "condition": name})
+            record = json.loads(path.read_text())
+            if record["seed"] in seen:
+                raise SystemExit(f"error: seed {record['seed']} is in both {seen[record['seed']]} and {source}")
+            seen[record["seed"]] = source
+            out.append({**record, "condition": name})
+    if not out:
+        raise SystemExit(f"error: no trial records in {', '.join(sources)} "
+                         "(SWEEP_FOLDER:CONDITION reads SWEEP_FOLDER/CONDITION-seedN/result.json)")
     return out
 
 
