@@ -100,6 +100,9 @@ class CpgConfig(_Section):
     # 100k-step policy that pins omega at 3 pi crossed the training block in only 75% of episodes
     upper: Triple = (0.40, 0.50, 2.0 * math.pi)
     rate_limit: Triple = (1.0, 1.0, 10.0)  # |d/dt (a, b, omega)| bound (rad/s, rad/s, rad/s^2)
+    # how fast each of (a, b, omega) may fall, same units (None: rate_limit). A slow fall of b keeps a lift up for a
+    # while after the policy lowers it: the hind legs reach a face about 1 m after the front legs do
+    fall_rate_limit: Triple | None = None
     accel_limit: Triple = (4.0, 4.0, 40.0)  # action 1.0 maps to this second derivative
     convergence: PositiveFloat = 10.0  # pull-back gain onto the limit cycle (1/s)
     coupling: PositiveFloat = 4.0  # tripod phase-locking gain (1/s)
@@ -109,10 +112,16 @@ class CpgConfig(_Section):
         for name, lo, hi, init in zip(("a", "b", "omega"), self.lower, self.upper, self.initial, strict=True):
             if not 0 < lo <= init <= hi:
                 raise ValueError(f"{name}: need 0 < lower ({lo}) <= initial ({init}) <= upper ({hi})")
-        for name, value in (("rate_limit", self.rate_limit), ("accel_limit", self.accel_limit)):
+        for name, value in (("rate_limit", self.rate_limit), ("fall_rate_limit", self.falling_limit),
+                            ("accel_limit", self.accel_limit)):
             if min(value) <= 0:
                 raise ValueError(f"{name} must be positive, got {value}")
         return self
+
+    @property
+    def falling_limit(self) -> Triple:
+        """The bound on how fast (a, b, omega) may decrease: fall_rate_limit, or rate_limit when unset."""
+        return self.rate_limit if self.fall_rate_limit is None else self.fall_rate_limit
 
 
 def _known_sensor(name: str) -> str:

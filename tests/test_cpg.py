@@ -101,8 +101,10 @@ def test_advance_plans_a_control_step_like_single_steps():
     assert np.array_equal(one.params, many.params) and np.array_equal(one.rates, many.rates)
 
 
-def test_parameter_path_equals_repeated_integration():
-    cfg = CpgConfig()
+@pytest.mark.parametrize(
+    "cfg", [CpgConfig(), CpgConfig(fall_rate_limit=(0.5, 0.1, 2.0))], ids=["symmetric", "slow_fall"]
+)
+def test_parameter_path_equals_repeated_integration(cfg):
     rng = np.random.default_rng(2)
     values, rates = np.asarray(cfg.initial), np.zeros(3)
     for _ in range(300):  # random accelerations drive the values into their bounds and back
@@ -145,6 +147,22 @@ def test_parameter_integration_respects_bounds_and_rate_limits():
     for _ in range(4000):
         values, rates = integrate_parameters(values, rates, -np.asarray(cfg.accel_limit), DT, cfg)
     assert np.allclose(values, cfg.lower)
+
+
+def test_fall_rate_limit_slows_the_fall_alone():
+    cfg = CpgConfig(fall_rate_limit=(1.0, 0.1, 10.0))
+    values, rates = np.array([0.25, 0.5, 4.0]), np.zeros(3)
+    down = -np.asarray(cfg.accel_limit)
+    for _ in range(240):  # one second of full negative acceleration
+        values, rates = integrate_parameters(values, rates, down, DT, cfg)
+    assert rates[1] == pytest.approx(-0.1)  # b falls at its own 0.1 rad/s: about 0.1 rad in the second
+    assert 0.39 < values[1] < 0.41
+    assert values[0] == pytest.approx(cfg.lower[0])  # a keeps the symmetric 1 rad/s and reaches its floor
+    values, rates = np.array([0.25, 0.2, 4.0]), np.zeros(3)
+    for _ in range(60):  # rising is not slowed: 4 rad/s^2 for 0.25 s reaches the 1 rad/s rate limit
+        values, rates = integrate_parameters(values, rates, -down, DT, cfg)
+    assert rates[1] == pytest.approx(cfg.rate_limit[1])
+    assert CpgConfig().falling_limit == CpgConfig().rate_limit
 
 
 def test_swing_lifts_and_stance_holds_the_ik_angles():

@@ -73,6 +73,15 @@ def test_observation_space_follows_the_setting_and_checkers_pass() -> None:
         assert not [str(w.message) for w in caught]
 
 
+def test_cpg_rates_are_bounded_by_the_fall_rate_limit() -> None:
+    from hexpipe.config import CpgConfig, SensorConfig
+    from hexpipe.envs.hexapod import observation_space
+
+    space = observation_space(CpgConfig(fall_rate_limit=(1.0, 0.1, 10.0)), SensorConfig(), TaskConfig())["cpg"]
+    np.testing.assert_allclose(space.low[3:], [-1.0, -0.1, -10.0])
+    np.testing.assert_allclose(space.high[3:], CpgConfig().rate_limit)
+
+
 def test_policy_features_follow_the_setting() -> None:
     """The VecEnv feature wrapper sizes its vector from the env's spaces: 2 fewer inputs without position."""
     from stable_baselines3.common.vec_env import DummyVecEnv

@@ -53,11 +53,11 @@ def observation_space(cpg: CpgConfig, sensors: SensorConfig, task: TaskConfig, p
     """The observation Dict an env with these settings produces; needs no simulator. privileged: add the critic's
     `privileged` vector (hexpipe/envs/privileged.py)."""
     lo, hi = np.asarray(cpg.lower), np.asarray(cpg.upper)
-    rate = np.asarray(cpg.rate_limit)
+    rate, fall = np.asarray(cpg.rate_limit), np.asarray(cpg.falling_limit)
     obs: dict[str, spaces.Space] = {
         "body": spaces.Box(-100.0, 100.0, shape=(13 if task.observe_position else 11,), dtype=np.float32),
         "cpg": spaces.Box(
-            np.concatenate([lo, -rate]).astype(np.float32), np.concatenate([hi, rate]).astype(np.float32)
+            np.concatenate([lo, -fall]).astype(np.float32), np.concatenate([hi, rate]).astype(np.float32)
         ),
     }
     for name in task.sensors:

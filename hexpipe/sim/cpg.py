@@ -71,9 +71,10 @@ def integrate_parameters(
     """Integrate the second derivative `accel` of (a, b, omega) over dt with the rate and value bounds.
 
     A value that reaches a bound stops there with zero rate, so the policy never has to unwind a saturated rate.
+    Rates stay within [-cfg.falling_limit, cfg.rate_limit].
     """
     lower, upper, rate_limit = cfg.lower, cfg.upper, cfg.rate_limit
-    rates = np.minimum(np.maximum(rates + accel * dt, np.negative(rate_limit)), rate_limit)
+    rates = np.minimum(np.maximum(rates + accel * dt, np.negative(cfg.falling_limit)), rate_limit)
     values = values + rates * dt
     hit = (values <= lower) | (values >= upper)
     if hit.any():
@@ -92,9 +93,9 @@ def parameter_path(
     out_v, out_r = np.empty((n, 3)), np.empty((n, 3))
     for j in range(3):
         v, r, acc = float(values[j]), float(rates[j]), float(accel[j]) * dt
-        lo, hi, lim = cfg.lower[j], cfg.upper[j], cfg.rate_limit[j]
+        lo, hi, lim, fall = cfg.lower[j], cfg.upper[j], cfg.rate_limit[j], cfg.falling_limit[j]
         for k in range(n):
-            r = min(max(r + acc, -lim), lim)
+            r = min(max(r + acc, -fall), lim)
             v += r * dt
             if v <= lo or v >= hi:
                 v, r = min(max(v, lo), hi), 0.0
