@@ -5,7 +5,8 @@ whose trials ran in different sweeps: each side pools the records of one or more
         --a reports/sweeps/levers:default --a reports/sweeps/forward:numpy \
         --b reports/sweeps/privileged:default --b reports/sweeps/forward:torch
 
---stalls adds the failed episodes on the block courses, counted by where the feet were when each ended.
+--stalls adds the failed episodes on the block courses, counted by where the feet were when each ended;
+--terrains adds each terrain's success, the mean over seeds of each seed's rate.
 """
 
 import argparse
@@ -44,6 +45,8 @@ def main() -> None:
     parser.add_argument("--b", action="append", required=True, help="SWEEP_FOLDER:CONDITION (repeatable)")
     parser.add_argument("--stalls", action="store_true", help="also count the failed episodes on the block courses "
                         "by where the feet were (evaluate's stall_legs)")
+    parser.add_argument("--terrains", action="store_true", help="also print each terrain's success per side (mean "
+                        "over seeds of each seed's success rate)")
     args = parser.parse_args()
     episodes = episodes_frame(records(args.a, "a") + records(args.b, "b"))
     episodes = episodes[episodes["controller"] == LEARNED]
@@ -54,6 +57,11 @@ def main() -> None:
     print(f"P(a beats b) = {result['probability']:.2f} [{result['probability_low']:.2f}, "
           f"{result['probability_high']:.2f}]; pooled success a {pooled['a']:.2f} ({seeds['a']} seeds), "
           f"b {pooled['b']:.2f} ({seeds['b']} seeds)")
+    if args.terrains:
+        rates = episodes.groupby(["condition", "terrain", "trial"])["success"].mean()
+        table = rates.groupby(["terrain", "condition"]).mean().unstack().reindex(terrains)
+        print("success per terrain (mean over seeds):")
+        print(table.round(2).to_string())
     if args.stalls:
         failed = episodes[~episodes["success"] & episodes["terrain"].isin(BLOCK_COURSES)]
         where = failed["stall_legs"].fillna("-").map(lambda legs: STALL_KIND.get(legs, "a foot at a face"))
