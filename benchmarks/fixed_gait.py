@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from hexpipe.config import SimConfig, TaskConfig
+from hexpipe.config import CpgConfig, SimConfig, TaskConfig
 from hexpipe.envs.hexapod import HexapodEnv
 from hexpipe.envs.rewards import cost_of_transport
 from hexpipe.sim.terrain import TerrainRecipe
@@ -15,7 +15,8 @@ from hexpipe.sim.terrain import TerrainRecipe
 def fixed_gait_episode(terrain: str | TerrainRecipe, a: float, b: float, seed: int, sim: SimConfig | None = None,
                        omega: float = 1.5 * math.pi) -> dict:
     """Walk (a, b, omega) until the episode ends; one row: termination, distance (m), time (s), cost of transport."""
-    env = HexapodEnv(terrain, sim=sim, initial_cpg=(a, b, omega), task=TaskConfig(sensors=()))
+    gait = (a, b, omega)
+    env = HexapodEnv(terrain, sim=sim, cpg=CpgConfig().holding(gait), initial_cpg=gait, task=TaskConfig(sensors=()))
     env.reset(seed=seed)
     while True:
         _, _, terminated, truncated, info = env.step(np.zeros(3))

@@ -100,8 +100,9 @@ class CpgConfig(_Section):
     # 100k-step policy that pins omega at 3 pi crossed the training block in only 75% of episodes
     upper: Triple = (0.40, 0.50, 2.0 * math.pi)
     rate_limit: Triple = (1.0, 1.0, 10.0)  # |d/dt (a, b, omega)| bound (rad/s, rad/s, rad/s^2)
-    # how fast each of (a, b, omega) may fall, same units (None: rate_limit). A slow fall of b keeps a lift up for a
-    # while after the policy lowers it: the hind legs reach a face about 1 m after the front legs do
+    # how fast each of (a, b, omega) may fall, same units (None: rate_limit). A slow fall of b keeps a lift up for
+    # seconds after the policy lowers it: the hind legs reach a face about 1 m after the front legs do
+    # (reports/experiments, "slowfall")
     fall_rate_limit: Triple | None = None
     accel_limit: Triple = (4.0, 4.0, 40.0)  # action 1.0 maps to this second derivative
     convergence: PositiveFloat = 10.0  # pull-back gain onto the limit cycle (1/s)
@@ -122,6 +123,12 @@ class CpgConfig(_Section):
     def falling_limit(self) -> Triple:
         """The bound on how fast (a, b, omega) may decrease: fall_rate_limit, or rate_limit when unset."""
         return self.rate_limit if self.fall_rate_limit is None else self.fall_rate_limit
+
+    def holding(self, gait: Triple) -> CpgConfig:
+        """These settings with `gait` (a, b, omega) as the initial parameters and the floors lowered to it where it
+        lies below them: the floors bound what a policy may choose, not an open-loop gait it is compared with."""
+        lower = tuple(min(lo, g) for lo, g in zip(self.lower, gait, strict=True))
+        return self.model_copy(update={"initial": tuple(gait), "lower": lower})
 
 
 def _known_sensor(name: str) -> str:
@@ -373,6 +380,16 @@ class Params(_Section):
     ppo: PpoConfig = PpoConfig()
     eval: EvalConfig = EvalConfig()
     sweep: SweepConfig = SweepConfig()
+
+    @model_validator(mode="after")
+    def _grid_inside_cpg_bounds(self) -> Params:
+        for i, name in enumerate(("a", "b", "omega")):
+            lo, hi = self.cpg.lower[i], self.cpg.upper[i]
+            outside = [v for v in getattr(self.eval, f"grid_{name}") if not lo <= v <= hi]
+            if outside:
+                raise ValueError(f"eval.grid_{name}: {outside[0]:g} is outside the CPG bounds [{lo:g}, {hi:g}] "
+                                 "(cpg.lower/upper)")
+        return self
 
 
 def params_hash(params: Params, **stage_excludes: set[str]) -> str:

@@ -102,7 +102,7 @@ def test_advance_plans_a_control_step_like_single_steps():
 
 
 @pytest.mark.parametrize(
-    "cfg", [CpgConfig(), CpgConfig(fall_rate_limit=(0.5, 0.1, 2.0))], ids=["symmetric", "slow_fall"]
+    "cfg", [CpgConfig(fall_rate_limit=None), CpgConfig(fall_rate_limit=(0.5, 0.1, 2.0))], ids=["symmetric", "slow_fall"]
 )
 def test_parameter_path_equals_repeated_integration(cfg):
     rng = np.random.default_rng(2)
@@ -146,6 +146,7 @@ def test_parameter_integration_respects_bounds_and_rate_limits():
     assert np.allclose(rates, 0.0)
     for _ in range(4000):
         values, rates = integrate_parameters(values, rates, -np.asarray(cfg.accel_limit), DT, cfg)
+        assert np.all(rates >= -np.asarray(cfg.falling_limit) - 1e-12)
     assert np.allclose(values, cfg.lower)
 
 
@@ -162,7 +163,15 @@ def test_fall_rate_limit_slows_the_fall_alone():
     for _ in range(60):  # rising is not slowed: 4 rad/s^2 for 0.25 s reaches the 1 rad/s rate limit
         values, rates = integrate_parameters(values, rates, -down, DT, cfg)
     assert rates[1] == pytest.approx(cfg.rate_limit[1])
-    assert CpgConfig().falling_limit == CpgConfig().rate_limit
+    assert CpgConfig(fall_rate_limit=None).falling_limit == CpgConfig().rate_limit
+
+
+def test_holding_lowers_only_the_floors_a_fixed_gait_needs():
+    cfg = CpgConfig(lower=(0.05, 0.2, math.pi), initial=(0.25, 0.2, 1.5 * math.pi))  # the floors sweeps' bounds
+    held = cfg.holding((0.25, 0.15, 1.5 * math.pi))
+    assert held.initial == (0.25, 0.15, 1.5 * math.pi)
+    assert held.lower == (cfg.lower[0], 0.15, cfg.lower[2]) and held.upper == cfg.upper
+    assert cfg.holding((0.3, 0.4, 4.0)).lower == cfg.lower
 
 
 def test_swing_lifts_and_stance_holds_the_ik_angles():

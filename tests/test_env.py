@@ -8,12 +8,17 @@ import numpy as np
 import pytest
 
 import hexpipe
-from hexpipe.config import SensorConfig, TaskConfig
+from hexpipe.config import CpgConfig, SensorConfig, TaskConfig
 from hexpipe.envs.hexapod import HexapodEnv
 from hexpipe.sensors import SENSORS
 
-LOW_GAIT = (0.25, 0.15, 1.5 * math.pi)  # the default: fast, low steps
+LOW_GAIT = (0.25, 0.15, 1.5 * math.pi)  # the initial gait before the b floor: fast, low steps
 HIGH_GAIT = (0.25, 0.40, 1.5 * math.pi)  # b = 0.40 rad lifts the feet ~0.15 m, over the 0.10 m block
+
+
+def holding(gait):
+    """The env's CPG settings for a fixed gait, which may lie below the policy's floors."""
+    return CpgConfig().holding(gait)
 
 
 def rollout(env: HexapodEnv, seed: int, actions=None, max_steps: int = 10_000) -> dict:
@@ -157,7 +162,7 @@ def test_default_gait_walks_3m_on_flat(seed):
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_block_stops_the_low_gait(seed):
-    env = HexapodEnv("single_block", initial_cpg=LOW_GAIT, task=TaskConfig(sensors=()))
+    env = HexapodEnv("single_block", cpg=holding(LOW_GAIT), initial_cpg=LOW_GAIT, task=TaskConfig(sensors=()))
     info = rollout(env, seed)
     assert info["termination"] == "stuck"
     assert 0.3 < info["distance"] < 0.7  # front feet against the block face at 1.0 m
@@ -203,7 +208,8 @@ def test_reward_is_the_papers_unless_power_costs_something():
 def test_giving_up_costs_the_failure_penalty_once_and_reaching_the_goal_costs_nothing():
     ends = {}
     for terrain, gait in (("single_block", LOW_GAIT), ("flat", None)):  # the low gait sticks at the block face
-        env = HexapodEnv(terrain, initial_cpg=gait, task=TaskConfig(sensors=(), failure_penalty=500.0))
+        cpg = holding(gait) if gait else None
+        env = HexapodEnv(terrain, cpg=cpg, initial_cpg=gait, task=TaskConfig(sensors=(), failure_penalty=500.0))
         env.reset(seed=0)
         failure, done = [], False
         while not done:
@@ -222,7 +228,7 @@ def test_a_high_gait_costs_more_energy_per_metre_on_flat():
 
     cot = {}
     for gait in (LOW_GAIT, HIGH_GAIT):
-        env = HexapodEnv("flat", initial_cpg=gait, task=TaskConfig(sensors=(), time_limit=8.0))
+        env = HexapodEnv("flat", cpg=holding(gait), initial_cpg=gait, task=TaskConfig(sensors=(), time_limit=8.0))
         info = rollout(env, seed=0)
         cot[gait] = cost_of_transport(info["energy"], env.robot_spec.total_mass, info["distance"])
         env.close()

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from hexpipe.config import Params, TaskConfig, load_params
+from hexpipe.config import CpgConfig, Params, TaskConfig, load_params
 from hexpipe.envs.hexapod import HexapodEnv
 from hexpipe.evaluation.suite import evaluation_suite
 from hexpipe.sim.terrain import SCENARIOS, realize
@@ -45,7 +45,8 @@ def test_default_suite_is_flat_the_paper_scenes_and_the_unseen_layouts():
 
 def fixed_gait(terrain: str, a: float, b: float, seed: int = 0) -> tuple[str, float]:
     """(termination, distance) of one zero-action episode at omega = 1.5 pi."""
-    env = HexapodEnv(terrain, initial_cpg=(a, b, 1.5 * math.pi), task=TaskConfig(sensors=()))
+    gait = (a, b, 1.5 * math.pi)
+    env = HexapodEnv(terrain, cpg=CpgConfig().holding(gait), initial_cpg=gait, task=TaskConfig(sensors=()))
     env.reset(seed=seed)
     try:
         while True:
@@ -58,7 +59,7 @@ def fixed_gait(terrain: str, a: float, b: float, seed: int = 0) -> tuple[str, fl
 
 @pytest.mark.parametrize("terrain", NEW)
 def test_a_low_gait_stops_and_a_high_gait_crosses(terrain):
-    termination, distance = fixed_gait(terrain, 0.25, 0.15)  # cpg.initial: the open-loop baseline
+    termination, distance = fixed_gait(terrain, 0.25, 0.15)  # a low gait (cpg.initial before the b floor)
     assert termination == "stuck" and distance < 1.2
     assert fixed_gait(terrain, 0.4, 0.5)[0] == "goal"  # the grid's best fixed gait under the old ranking
 
