@@ -12,12 +12,12 @@ from hexpipe.config import CpgConfig, SensorConfig, TaskConfig
 from hexpipe.envs.hexapod import HexapodEnv
 from hexpipe.sensors import SENSORS
 
-LOW_GAIT = (0.25, 0.15, 1.5 * math.pi)  # the initial gait before the b floor: fast, low steps
+LOW_GAIT = (0.25, 0.15, 1.5 * math.pi)  # the default: fast, low steps
 HIGH_GAIT = (0.25, 0.40, 1.5 * math.pi)  # b = 0.40 rad lifts the feet ~0.15 m, over the 0.10 m block
 
 
 def holding(gait):
-    """The env's CPG settings for a fixed gait, which may lie below the policy's floors."""
+    """The env's CPG settings for a fixed gait: it holds even where cpg.lower is raised above it."""
     return CpgConfig().holding(gait)
 
 

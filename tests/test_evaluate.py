@@ -184,7 +184,7 @@ def test_a_low_gait_stops_with_its_front_feet_at_the_face(gait, termination, leg
     """The physical premise, read by evaluate: b = 0.15 stalls at the block's face, front feet first; b = 0.40
     crosses, and an episode that arrives names no legs."""
     params = load_params(ROOT / "params.yaml")
-    params = params.model_copy(update={"cpg": params.cpg.holding(gait)})  # b = 0.15 lies below the policy's floor
+    params = params.model_copy(update={"cpg": params.cpg.holding(gait)})  # also under raised floors
     scenario = load_scenarios(["single_block"])[0]
     row = run_episode(params, EpisodeJob(scenario, ControllerSpec("fixed", gait=gait), 0, 1000)).row
     assert (row["termination"], row["stall_legs"]) == (termination, legs)
