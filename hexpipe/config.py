@@ -381,16 +381,6 @@ class Params(_Section):
     eval: EvalConfig = EvalConfig()
     sweep: SweepConfig = SweepConfig()
 
-    @model_validator(mode="after")
-    def _grid_inside_cpg_bounds(self) -> Params:
-        for i, name in enumerate(("a", "b", "omega")):
-            lo, hi = self.cpg.lower[i], self.cpg.upper[i]
-            outside = [v for v in getattr(self.eval, f"grid_{name}") if not lo <= v <= hi]
-            if outside:
-                raise ValueError(f"eval.grid_{name}: {outside[0]:g} is outside the CPG bounds [{lo:g}, {hi:g}] "
-                                 "(cpg.lower/upper)")
-        return self
-
 
 def params_hash(params: Params, **stage_excludes: set[str]) -> str:
     """Short hash of the simulation sections (sim, cpg, sensors, task) plus each named stage section minus the

@@ -45,7 +45,6 @@ def test_overrides_are_typed_and_nested():
         ("ppo.n_envs=0", "greater than or equal to 1"),
         ("cpg.initial=[0.25, 0.9, 4.0]", "b: need 0 < lower"),
         ("cpg.fall_rate_limit=[1.0, 0.0, 10.0]", "fall_rate_limit must be positive"),
-        ("eval.grid_b=[0.02, 0.4]", "eval.grid_b: 0.02 is outside the CPG bounds [0.05, 0.5]"),
         ("sim.control_hz=7", "control_hz=7 must divide physics_hz=120"),
         ("task.sensors=[lidar]", "task.sensors[0]"),
         ("nosuchsection.x=1", "unknown key 'nosuchsection'"),
