@@ -18,9 +18,9 @@ import pandas as pd
 
 
 def record_of(trial_data: Path) -> dict:
-    """reports/sweeps/NAME/TRIAL/result.json for data/sweeps/NAME/TRIAL."""
-    root = trial_data.parents[2]
-    return json.loads((root.parent / "reports" / "sweeps" / trial_data.parent.name / trial_data.name
+    """reports/sweeps/NAME/TRIAL/result.json for data/sweeps/NAME/TRIAL, in the same repository."""
+    repository = trial_data.parents[3]
+    return json.loads((repository / "reports" / "sweeps" / trial_data.parent.name / trial_data.name
                        / "result.json").read_text())
 
 
@@ -40,8 +40,11 @@ def main() -> None:
     args = parser.parse_args()
     rows = []
     for trial in args.trials:
-        record = record_of(trial)
-        traces = pd.read_csv(trial / "eval" / "cpg_traces.csv.gz")
+        try:
+            record = record_of(trial)
+            traces = pd.read_csv(trial / "eval" / "cpg_traces.csv.gz")
+        except (FileNotFoundError, IndexError) as exc:
+            raise SystemExit(f"error: {trial} is not a complete sweep trial's data/sweeps/NAME/TRIAL folder ({exc})")
         traces = traces[traces["controller"] == "policy"]
         for episode in record["episodes"]:
             if episode["controller"] != "policy" or episode["terrain"] == "flat":
@@ -57,7 +60,7 @@ def main() -> None:
                                        at_omega_floor=("at_omega_floor", "mean"))
     print(f"last {args.seconds:g} s of each episode, mean over episodes:")
     print(summary.round(2).to_string())
-    failed = table[~table["end"].isin(["success"])]
+    failed = table[table["end"] != "success"]
     print("failed episodes per seed:")
     print(failed.groupby(["seed", "end"])[["b", "omega", "at_omega_floor"]].mean().round(2).to_string())
 
