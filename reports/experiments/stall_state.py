@@ -44,7 +44,7 @@ def main() -> None:
             record = record_of(trial)
             traces = pd.read_csv(trial / "eval" / "cpg_traces.csv.gz")
         except (FileNotFoundError, IndexError) as exc:
-            raise SystemExit(f"error: {trial} is not a complete sweep trial's data/sweeps/NAME/TRIAL folder ({exc})")
+            raise SystemExit(f"error: {trial} is not a complete sweep trial's data/sweeps/NAME/TRIAL folder ({exc})") from None
         traces = traces[traces["controller"] == "policy"]
         for episode in record["episodes"]:
             if episode["controller"] != "policy" or episode["terrain"] == "flat":
