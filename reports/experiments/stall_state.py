@@ -17,11 +17,17 @@ from pathlib import Path
 import pandas as pd
 
 
-def record_of(trial_data: Path) -> dict:
-    """reports/sweeps/NAME/TRIAL/result.json for data/sweeps/NAME/TRIAL, in the same repository."""
-    repository = trial_data.parents[3]
-    return json.loads((repository / "reports" / "sweeps" / trial_data.parent.name / trial_data.name
-                       / "result.json").read_text())
+def trial_files(trial_data: Path) -> tuple[Path, Path]:
+    """(its cpg_traces.csv.gz, reports/sweeps/NAME/TRIAL/result.json in the same repository) for a
+    data/sweeps/NAME/TRIAL folder; SystemExit with one line when either is missing."""
+    traces = trial_data / "eval" / "cpg_traces.csv.gz"
+    parts = trial_data.resolve().parts
+    record = Path(*parts[:-4], "reports", "sweeps", *parts[-2:], "result.json") if len(parts) > 4 else None
+    for path in (traces, record):
+        if path is None or not path.is_file():
+            raise SystemExit(f"error: {trial_data} is not a complete sweep trial folder (data/sweeps/NAME/TRIAL): "
+                             f"missing {path or 'reports/sweeps/NAME/TRIAL/result.json'}")
+    return traces, record
 
 
 def end_kind(episode: dict) -> str:
@@ -40,11 +46,9 @@ def main() -> None:
     args = parser.parse_args()
     rows = []
     for trial in args.trials:
-        try:
-            record = record_of(trial)
-            traces = pd.read_csv(trial / "eval" / "cpg_traces.csv.gz")
-        except (FileNotFoundError, IndexError) as exc:
-            raise SystemExit(f"error: {trial} is not a complete sweep trial's data/sweeps/NAME/TRIAL folder ({exc})") from None
+        traces_path, record_path = trial_files(trial)
+        record = json.loads(record_path.read_text())
+        traces = pd.read_csv(traces_path)
         traces = traces[traces["controller"] == "policy"]
         for episode in record["episodes"]:
             if episode["controller"] != "policy" or episode["terrain"] == "flat":
