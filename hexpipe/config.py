@@ -104,6 +104,9 @@ class CpgConfig(_Section):
     # seconds after the policy lowers it: the hind legs reach a face about 1 m after the front legs do
     # (reports/experiments, "slowfall")
     fall_rate_limit: Triple | None = None
+    # true: each leg lifts at least as high as the front legs did where it now stands (follow the leader), so a lift
+    # chosen at a face carries the middle and hind legs over it too (hexpipe/sim/lift_trail.py)
+    lift_follows: bool = False
     accel_limit: Triple = (4.0, 4.0, 40.0)  # action 1.0 maps to this second derivative
     convergence: PositiveFloat = 10.0  # pull-back gain onto the limit cycle (1/s)
     coupling: PositiveFloat = 4.0  # tripod phase-locking gain (1/s)

@@ -38,6 +38,7 @@ from hexpipe.envs.state import WORLD_FRAME, EnvScene, EnvState
 from hexpipe.sensors.heightmap import HEADING_FRAME, quat_to_yaw
 from hexpipe.sim.cpg import CPG
 from hexpipe.sim.gait import GaitMap, slew_path
+from hexpipe.sim.lift_trail import LiftTrail, foot_lags
 from hexpipe.sim.robot import Robot, RobotSpec, robot_shapes
 from hexpipe.sim.terrain import Terrain, TerrainRecipe, build_terrain, load_terrain, realize
 
@@ -118,6 +119,8 @@ class HexapodEnv(gym.Env):
             self.robot_spec, self.sim_cfg.body_height, self.sim_cfg.stance_reach, self.sim_cfg.lift_gain
         )
         self.cpg = CPG(self.cpg_cfg, np.array([leg.tripod for leg in self.robot_spec.legs]))
+        self.trail = (LiftTrail(foot_lags(self.robot_spec, self.sim_cfg.stance_reach), self.max_steps + 1)
+                      if self.cpg_cfg.lift_follows else None)
         self._readers: dict[str, Callable[[registry.SimView], np.ndarray]] = {}  # made on first use
 
         self.action_space = spaces.Box(-1.0, 1.0, shape=(3,), dtype=np.float32)
@@ -169,6 +172,8 @@ class HexapodEnv(gym.Env):
 
         phase0 = float(self.np_random.uniform(0.0, 2 * math.pi))
         self.cpg.reset(self.initial_cpg, phase0=phase0)
+        if self.trail is not None:
+            self.trail.reset()
         ground = float(self.terrain.height_at(np.zeros(1), np.zeros(1))[0])
         start = (0.0, 0.0, ground + self.sim_cfg.body_height + 0.01)
         self.robot = Robot(c, self.robot_spec, start)
@@ -198,7 +203,12 @@ class HexapodEnv(gym.Env):
         p, c = self._p, self.client
         gains = (self.sim_cfg.position_gain, self.sim_cfg.velocity_gain)
         # The CPG is open loop: plan the whole control step's joint targets at once, then run the physics
-        xy = self.cpg.advance(accel, self.physics_dt, self.substeps)
+        floor = None
+        if self.trail is not None:
+            x = self._last_x
+            self.trail.record(x, float(self.cpg.params[1]))
+            floor = self.trail.floor(x)
+        xy = self.cpg.advance(accel, self.physics_dt, self.substeps, floor)
         targets = slew_path(self._targets, self.gait.joint_targets(xy), self._max_joint_step)
         self._targets = targets[-1]
         power = 0.0

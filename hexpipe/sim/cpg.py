@@ -125,8 +125,12 @@ class CPG:
             z = np.asarray(z, dtype=float)
             self.w = z[:, 0] + 1j * z[:, 1]
 
-    def advance(self, accel: np.ndarray, dt: float, n: int) -> np.ndarray:
-        """Advance n substeps of dt (s) under a constant `accel`; returns (n, 6, 2) joint-space (x, y) (rad)."""
+    def advance(self, accel: np.ndarray, dt: float, n: int, lift_floor: np.ndarray | None = None) -> np.ndarray:
+        """Advance n substeps of dt (s) under a constant `accel`; returns (n, 6, 2) joint-space (x, y) (rad).
+
+        lift_floor: optional (6,) lowest lift per leg (rad); a leg swings with the larger of it and b
+        (`hexpipe.sim.lift_trail`). The parameters themselves are unchanged.
+        """
         values, rates = parameter_path(self.params, self.rates, accel, dt, n, self.cfg)
         self.params, self.rates = values[-1].copy(), rates[-1].copy()
         key = (dt, n)
@@ -135,7 +139,8 @@ class CPG:
         w = radial_flow(self._flows[key] @ self.w, self.cfg.convergence, dt * np.arange(1, n + 1))
         z = np.exp(1j * dt * np.cumsum(values[:, 2]))[:, None] * w
         self.w = z[-1]
-        return np.stack([values[:, :1] * z.real, values[:, 1:2] * z.imag], axis=-1)
+        lift = values[:, 1:2] if lift_floor is None else np.maximum(values[:, 1:2], lift_floor[None, :])
+        return np.stack([values[:, :1] * z.real, lift * z.imag], axis=-1)
 
     def step(self, accel: np.ndarray, dt: float) -> np.ndarray:
         """Advance one substep of dt (s); returns the joint-space (x, y) of every leg (rad)."""
