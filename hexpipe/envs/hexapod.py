@@ -183,7 +183,8 @@ class HexapodEnv(gym.Env):
         if mass_scale != 1.0:
             self.robot.scale_base_mass(mass_scale)
         self._physics = (friction, mass_scale)
-        targets = self.gait.joint_targets(self.cpg.xy)
+        self._xy = self.cpg.xy
+        targets = self.gait.joint_targets(self._xy)
         self.robot.reset_joints(targets)
         self._targets = targets
         self.robot.command(targets, self.sim_cfg.position_gain, self.sim_cfg.velocity_gain)
@@ -211,6 +212,7 @@ class HexapodEnv(gym.Env):
         xy = self.cpg.advance(accel, self.physics_dt, self.substeps, floor)
         targets = slew_path(self._targets, self.gait.joint_targets(xy), self._max_joint_step)
         self._targets = targets[-1]
+        self._xy = xy[-1]  # each leg's (x, y) now, with its lift floor (the recorder logs it)
         power = 0.0
         for target in targets:
             self.robot.command(target, *gains)
@@ -341,7 +343,7 @@ class HexapodEnv(gym.Env):
             step=self.steps, time=self.steps * self.control_dt, terrain=self.terrain.name,
             transforms=tuple(transforms), joint_names=tuple(self.robot_spec.joint_names),
             joint_position=q, joint_velocity=dq, joint_effort=tau,
-            cpg_params=self.cpg.params.copy(), cpg_rates=self.cpg.rates.copy(), cpg_xy=self.cpg.xy.copy(),
+            cpg_params=self.cpg.params.copy(), cpg_rates=self.cpg.rates.copy(), cpg_xy=self._xy.copy(),
             reward_terms=info["reward_terms"] or dict.fromkeys(self._reward_terms(0.0, 0.0), 0.0),
             power=float(info["power"]), energy=float(info["energy"]), distance=float(info["distance"]),
             termination=info["termination"], labels=self.terrain_labels(),
