@@ -94,8 +94,10 @@ class CpgConfig(_Section):
     The policy sets the second derivative of (a, b, omega), integrated with the rate and value bounds below.
     """
 
-    initial: Triple = (0.25, 0.15, 1.5 * math.pi)
-    lower: Triple = (0.05, 0.05, 0.5 * math.pi)
+    initial: Triple = (0.25, 0.2, 1.5 * math.pi)
+    # floors b >= 0.2 rad and omega >= pi rad/s (the paper's bounds: 0.05, pi/2): policies that failed sat on them,
+    # dragging their feet or crawling (reports/experiments, "floors"); `holding` lowers them for a fixed gait
+    lower: Triple = (0.05, 0.2, math.pi)
     # omega <= 2 pi (a 1 Hz stride): above it the rate-limited shoulder cannot reach the lift b asks for, and a
     # 100k-step policy that pins omega at 3 pi crossed the training block in only 75% of episodes
     upper: Triple = (0.40, 0.50, 2.0 * math.pi)
@@ -105,8 +107,8 @@ class CpgConfig(_Section):
     # (reports/experiments, "slowfall")
     fall_rate_limit: Triple | None = None
     # true: each leg lifts at least as high as the front legs did where it now stands (follow the leader), so a lift
-    # chosen at a face carries the middle and hind legs over it too (hexpipe/sim/lift_trail.py)
-    lift_follows: bool = False
+    # chosen at a face carries the middle and hind legs over it too (hexpipe/sim/lift_trail.py; the `follow` sweep)
+    lift_follows: bool = True
     accel_limit: Triple = (4.0, 4.0, 40.0)  # action 1.0 maps to this second derivative
     convergence: PositiveFloat = 10.0  # pull-back gain onto the limit cycle (1/s)
     coupling: PositiveFloat = 4.0  # tripod phase-locking gain (1/s)

@@ -109,6 +109,18 @@ def test_load_policy_without_params_uses_the_training_settings(seeing):
     assert policy.env_kwargs["task"].sensors == ("heightmap",) and not policy.drift
 
 
+def test_a_policy_recorded_before_lift_follows_runs_without_it(seeing, tmp_path):
+    """policy.json files written before `cpg.lift_follows` existed lack it: those policies trained without it."""
+    policy_dir = copy_policy(seeing, tmp_path / "ppo")
+    config = json.loads((policy_dir / "policy.json").read_text())
+    assert config["cpg"]["lift_follows"] is True  # today's default
+    del config["cpg"]["lift_follows"]
+    (policy_dir / "policy.json").write_text(json.dumps(config))
+    assert load_policy(policy_dir).params.cpg.lift_follows is False
+    now = load_params(ROOT / "params.yaml")
+    assert "cpg.lift_follows: False -> True" in load_policy(policy_dir, now).drift
+
+
 def test_evaluate_and_play_never_unpickle_the_sb3_files(seeing, tmp_path):
     """A crafted vecnormalize.pkl and model.zip (kept for --resume) are not read when a policy is loaded to run."""
     policy_dir = copy_policy(seeing, tmp_path / "ppo")

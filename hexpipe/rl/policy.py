@@ -147,7 +147,7 @@ def _training_params(config: dict[str, Any], path: Path) -> Params:
 
     sections = {}
     for name, model in (("sim", SimConfig), ("cpg", CpgConfig), ("sensors", SensorConfig)):
-        recorded = config.get(name)
+        recorded = _recorded(config, name)
         if not isinstance(recorded, dict):
             raise PolicyError(f"{path}: policy config lacks the {name} settings; pass params or {_RETRAIN}")
         sections[name] = {k: v for k, v in recorded.items() if k in model.model_fields}
@@ -155,6 +155,15 @@ def _training_params(config: dict[str, Any], path: Path) -> Params:
         return Params.model_validate(sections)
     except ValidationError as exc:
         raise PolicyError(f"{path}: recorded settings are invalid ({exc.errors()[0]['msg']})") from None
+
+
+def _recorded(config: dict[str, Any], section: str) -> Any:
+    """policy.json's settings of one section. A policy recorded before `cpg.lift_follows` existed was trained
+    without it: its default has been true since."""
+    recorded = config.get(section)
+    if section == "cpg" and isinstance(recorded, dict):
+        recorded = {"lift_follows": False, **recorded}
+    return recorded
 
 
 def _read_config(path: Path) -> dict[str, Any]:
@@ -216,7 +225,7 @@ def _drift(config: dict[str, Any], params: Params) -> list[str]:
     out = []
     for section in ("sim", "cpg"):
         now = getattr(params, section).model_dump(mode="json")
-        for key, trained in config.get(section, {}).items():
+        for key, trained in (_recorded(config, section) or {}).items():
             if key in now and now[key] != trained:
                 out.append(f"{section}.{key}: {trained} -> {now[key]}")
     trained_on = config.get("train_terrains")
