@@ -1,0 +1,71 @@
+"""Where a policy lifts on single_block, measured at the body (the report's adaptation figure) and at the front feet.
+
+The evaluation's adaptation figure is the mean b while the *base* is in the 0.3 m before the face, against b on
+open ground. The front feet lead the base by 0.47 m, so with `cpg.lift_follows` (the middle and hind legs carry the
+front legs' lift over the block) the lift a policy needs is the one it commands while the *front feet* approach
+the face: by the time the base is 0.3 m from it, the front legs are already on the block. This prints both.
+
+    .venv/bin/python reports/experiments/front_feet_lift.py /work/wt-follow/data/sweeps/follow/floors_follow-seed{0,1}
+
+Each argument is a sweep trial's data folder (`data/sweeps/NAME/TRIAL`, holding eval/cpg_traces.csv.gz).
+"""
+
+import argparse
+import math
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from hexpipe.config import SimConfig
+from hexpipe.evaluation.episodes import TRACE_COLUMNS, lift_before_and_away
+from hexpipe.sim.robot import RobotSpec
+from hexpipe.sim.terrain.recipes import SCENARIOS
+
+TERRAIN = "single_block"
+
+
+def front_feet_lead(spec: RobotSpec, stance_reach: float) -> float:
+    """How far ahead of the base (m) the front feet stand, at the stance's neutral point."""
+    return max((leg.radius + stance_reach) * math.cos(leg.angle) for leg in spec.legs)
+
+
+def lifts(traces: Path, lead: float) -> pd.DataFrame:
+    """Per policy episode on TERRAIN: b before the face at the body, at the front feet, and b on open ground."""
+    block = SCENARIOS[TERRAIN].boxes[0]
+    at_body = [(block.face, block.face + block.depth)]
+    at_feet = [(block.face - lead, block.face + block.depth - lead)]
+    frame = pd.read_csv(traces)
+    rows = []
+    for episode, trace in frame[(frame.terrain == TERRAIN) & (frame.controller == "policy")].groupby("episode"):
+        cpg = trace[list(TRACE_COLUMNS)].to_numpy(dtype=np.float32)
+        before_body, open_ground = lift_before_and_away(cpg, at_body)
+        before_feet, _ = lift_before_and_away(cpg, at_feet)
+        rows.append({"episode": episode, "body": before_body, "front_feet": before_feet, "open": open_ground})
+    return pd.DataFrame(rows)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("trials", nargs="+", type=Path, help="data/sweeps/NAME/TRIAL folders")
+    args = parser.parse_args()
+    lead = front_feet_lead(RobotSpec(), SimConfig().stance_reach)
+    rows = []
+    for trial in args.trials:
+        traces = trial / "eval" / "cpg_traces.csv.gz"
+        if not traces.is_file():
+            raise SystemExit(f"error: {trial} is not a sweep trial folder (data/sweeps/NAME/TRIAL): missing {traces}")
+        means = lifts(traces, lead).mean()
+        rows.append({"trial": trial.name, "b before (body)": means["body"],
+                     "b before (front feet)": means["front_feet"], "b open": means["open"]})
+    table = pd.DataFrame(rows).set_index("trial")
+    table["lift (body)"] = table["b before (body)"] - table["b open"]
+    table["lift (front feet)"] = table["b before (front feet)"] - table["b open"]
+    print(f"{TERRAIN}, policy episodes; the front feet lead the base by {lead:.2f} m; b in rad")
+    print(table.round(3).to_string())
+    print("mean over trials:")
+    print(table.mean().round(3).to_string())
+
+
+if __name__ == "__main__":
+    main()
