@@ -19,7 +19,8 @@ from fixed_gait import fixed_gait_episode
 from hexpipe.sim.terrain import load_terrain, parse_recipe
 
 TERRAINS = ["flat", "low_block", "single_block", "tall_block", "steps_up", "block_near", "block_far"]
-# (a, b) at omega = 1.5 pi: the default low gait (cpg.initial), a medium lift, b = 0.4, and the grid's best fixed gait
+# (a, b) at omega = 1.5 pi: the paper's low initial gait (cpg.initial before 89e3243), a medium lift, b = 0.4,
+# and the grid's best fixed gait
 GAITS = [(0.25, 0.15), (0.4, 0.25), (0.4, 0.4), (0.4, 0.5)]
 
 

@@ -59,7 +59,7 @@ def fixed_gait(terrain: str, a: float, b: float, seed: int = 0) -> tuple[str, fl
 
 @pytest.mark.parametrize("terrain", NEW)
 def test_a_low_gait_stops_and_a_high_gait_crosses(terrain):
-    termination, distance = fixed_gait(terrain, 0.25, 0.15)  # cpg.initial: the open-loop baseline
+    termination, distance = fixed_gait(terrain, 0.25, 0.15)  # the paper's low initial gait (cpg.initial before 89e3243)
     assert termination == "stuck" and distance < 1.2
     assert fixed_gait(terrain, 0.4, 0.5)[0] == "goal"  # the grid's best fixed gait under the old ranking
 
