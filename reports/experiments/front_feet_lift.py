@@ -25,11 +25,6 @@ from hexpipe.sim.terrain.recipes import SCENARIOS
 TERRAIN = "single_block"
 
 
-def front_feet_lead(spec: RobotSpec, stance_reach: float) -> float:
-    """How far ahead of the base (m) the front feet stand, at the stance's neutral point."""
-    return max((leg.radius + stance_reach) * math.cos(leg.angle) for leg in spec.legs)
-
-
 def lifts(traces: Path, lead: float) -> pd.DataFrame:
     """Per policy episode on TERRAIN: b before the face at the body, at the front feet, and b on open ground."""
     block = SCENARIOS[TERRAIN].boxes[0]
@@ -49,7 +44,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("trials", nargs="+", type=Path, help="data/sweeps/NAME/TRIAL folders")
     args = parser.parse_args()
-    lead = front_feet_lead(RobotSpec(), SimConfig().stance_reach)
+    # the front feet's neutral stance point, ahead of the base (as in hexpipe.sim.lift_trail.foot_lags)
+    spec, reach = RobotSpec(), SimConfig().stance_reach
+    lead = max((leg.radius + reach) * math.cos(leg.angle) for leg in spec.legs)
     rows = []
     for trial in args.trials:
         traces = trial / "eval" / "cpg_traces.csv.gz"
