@@ -15,7 +15,7 @@ import torch
 from hexpipe.config import VaeConfig
 from hexpipe.models.probes import rise_probes
 from hexpipe.models.vae import EncoderError, load_encoder
-from hexpipe.models.vae_data import load_dataset, split_by_episode
+from hexpipe.models.vae_data import VaeDataError, load_dataset, split_by_episode
 
 
 def main() -> None:
@@ -23,15 +23,16 @@ def main() -> None:
     parser.add_argument("encoders", nargs="+", type=Path, help="folders holding encoder.pt and encoder.json")
     parser.add_argument("--data", type=Path, default=Path("data/rollouts"), help="collected rollouts (MCAP)")
     args = parser.parse_args()
-    cfg = VaeConfig(data_dir=str(args.data))
-    data = load_dataset(cfg)
+    try:  # the encoders first: a wrong folder fails before the rollouts are read
+        encoders = {folder: load_encoder(folder) for folder in args.encoders}
+        cfg = VaeConfig(data_dir=str(args.data))
+        data = load_dataset(cfg)
+    except (EncoderError, VaeDataError) as exc:
+        raise SystemExit(f"error: {exc}") from None
     train_idx, val_idx = split_by_episode(data, cfg.val_fraction, cfg.seed)
     print(f"{args.data}: {len(train_idx)} train / {len(val_idx)} val frames")
-    for folder in args.encoders:
-        try:
-            net = load_encoder(folder)._net
-        except EncoderError as exc:
-            raise SystemExit(f"error: {exc}") from None
+    for folder, encoder in encoders.items():
+        net = encoder._net  # the dataset holds frames already preprocessed: the network, not encode()
         with torch.inference_mode():
             mu = {name: torch.cat([net(data.batch(idx[s:s + 512]))[0] for s in range(0, len(idx), 512)]).numpy()
                   for name, idx in (("train", train_idx), ("val", val_idx))}
