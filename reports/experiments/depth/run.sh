@@ -4,7 +4,7 @@
 # b 0.4, omega pi beside it), then prints the policy's success per depth. See reports/experiments/README.md, "depth".
 # Usage: bash reports/experiments/depth/run.sh OUT POLICY_DIR...   (POLICY_DIR: data/models/ppo or a sweep trial's ppo)
 set -euo pipefail
-out=$1; shift
+out=${1:?usage: bash reports/experiments/depth/run.sh OUT POLICY_DIR...}; shift
 mkdir -p "$out"
 here=reports/experiments/depth
 for policy in "$@"; do
