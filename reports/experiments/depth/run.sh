@@ -14,7 +14,8 @@ for policy in "$@"; do
     --set "eval.terrain_files=[$here/block_depth_05.yaml,$here/block_depth_07.yaml,$here/block_depth_085.yaml]" \
     --set eval.episodes=10 --set "eval.grid_a=[0.4]" --set "eval.grid_b=[0.4]" --set "eval.grid_omega=[3.141593]" \
     --set eval.record_video=false --set eval.workers=1 \
-    --set "eval.out_dir=$out/$name/eval" --set "eval.report_dir=$out/$name/report" > "$out/$name.log" 2>&1
+    --set "eval.out_dir=$out/$name/eval" --set "eval.report_dir=$out/$name/report" > "$out/$name.log" 2>&1 \
+    || { echo "error: $policy: evaluate failed (its output: $out/$name.log)" >&2; exit 1; }
 done
 .venv/bin/python - "$out" <<'EOF'
 import json, sys
