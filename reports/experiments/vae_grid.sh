@@ -22,7 +22,7 @@ for spec in "${specs[@]}"; do
   args=()
   for s in ${spec#*:}; do args+=(--set "$s"); done
   .venv/bin/hexpipe train-vae "${args[@]}" --set "vae.out_dir=$out/$name" --set "vae.report_dir=$out/$name-report" \
-    > "$out/$name.log" 2>&1
+    > "$out/$name.log" 2>&1 || { echo "error: $name: train-vae failed (its output: $out/$name.log)" >&2; exit 1; }
 done
 .venv/bin/python - "$out" "${specs[@]}" <<'EOF'
 import json, sys
