@@ -13,6 +13,7 @@ from typing import Annotated
 
 import typer
 from rich.console import Console
+from rich.markup import escape
 
 from hexpipe.atomic import write_json
 from hexpipe.config import ConfigError, Params, load_params
@@ -55,7 +56,8 @@ def user_errors() -> Iterator[None]:
         console.print("[yellow]interrupted[/yellow]: completed outputs are kept; rerun to finish")
         raise typer.Exit(130) from None
     except _user_errors() as exc:
-        console.print(f"[red]error:[/red] {' '.join(str(exc).split())}", highlight=False, soft_wrap=True)
+        message = escape(" ".join(str(exc).split()))  # a value such as [flat] is text here, not a style tag
+        console.print(f"[red]error:[/red] {message}", highlight=False, soft_wrap=True)
         raise typer.Exit(2) from None
 
 
@@ -218,7 +220,7 @@ def play(
                       + (f" (+{episodes - 1} more)" if episodes > 1 else ""), highlight=False, soft_wrap=True)
         try:
             rows = run_play(cfg, spec, terrain, first, episodes, mcap=mcap, video=video, live=options,
-                            echo=lambda text: console.print(text, highlight=False, soft_wrap=True))
+                            echo=lambda text: console.print(text, highlight=False, markup=False, soft_wrap=True))
         except KeyboardInterrupt:
             console.print("stopped (Ctrl-C): the live server, if any, is down; unfinished MCAP and video files "
                           "were removed")
@@ -326,11 +328,12 @@ def sweep(
         cfg = apply_overrides(cfg, extra, source="hexpipe sweep") if extra else cfg
         if dry_run:
             for trial in expand(cfg):
-                console.print(f"{trial.name}: {' '.join(trial.overrides) or '(no overrides)'}; {trial.cpus} CPUs")
+                console.print(f"{trial.name}: {' '.join(trial.overrides) or '(no overrides)'}; {trial.cpus} CPUs",
+                              highlight=False, markup=False)
             return
         try:
             outcome, out_dir = run_sweep(cfg, shlex.join(["hexpipe", *sys.argv[1:]]), address=address, cpus=cpus,
-                                         log=lambda text: console.print(text, highlight=False))
+                                         log=lambda text: console.print(text, highlight=False, markup=False))
         except ConnectionError as exc:
             raise ConfigError(f"cannot reach the Ray cluster at {address or 'RAY_ADDRESS'}: {exc}") from None
     console.print(f"sweep: {len(outcome.results)} trials complete ({len(outcome.ran)} run now, "

@@ -86,3 +86,11 @@ def test_help_lists_the_stages():
 
 def test_default_omega_is_three_quarters_hertz():
     assert Params().cpg.initial[2] == pytest.approx(1.5 * math.pi)
+
+
+def test_bracketed_input_is_echoed_as_typed():
+    """rich reads [word] as a style tag: a terrain named [flat] or an override holding [flat] must still show."""
+    result = runner.invoke(app, ["bench", "--terrains", "[flat]"])
+    assert result.exit_code == 2 and "unknown terrain '[flat]'" in result.output, result.output
+    result = runner.invoke(app, ["sweep", "--dry-run", "--seeds", "0", "--condition", "x:ppo.train_terrains=[flat]"])
+    assert result.exit_code == 0 and "x-seed0: ppo.train_terrains=[flat]" in result.output, result.output

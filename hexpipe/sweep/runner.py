@@ -147,7 +147,7 @@ def _wait_all(
 
     def say(text: str) -> None:  # above the live progress bar, not through it
         if show_progress:
-            bar.console.print(text, highlight=False, soft_wrap=True)
+            bar.console.print(text, highlight=False, markup=False, soft_wrap=True)
         else:
             log(text)
 
