@@ -43,9 +43,32 @@ def split(tree: dict[str, Any], speed_keys: Iterable[str]) -> tuple[dict[str, An
     return results, {k: v for k, v in speed.items() if v != {}}
 
 
-def move_speed(metrics_path: Path, speed_path: Path, speed_keys: Iterable[str]) -> dict[str, Any]:
-    """Rewrite metrics_path without `speed_keys` and write them to speed_path (both atomically); returns speed."""
+def machine() -> dict[str, Any]:
+    """The CPU a stage computed on. torch's float kernels (oneDNN, MKL) differ by instruction set, so the same data
+    and seed give the same weights only on a machine of the same kind (README, Reproducibility); the speed file
+    keeps this beside the timings, where `dvc metrics diff` does not see it."""
+    import platform
+
+    import torch
+
+    model = platform.processor() or platform.machine()
+    cpuinfo = Path("/proc/cpuinfo")
+    if cpuinfo.is_file():
+        names = [line.split(":", 1)[1].strip() for line in cpuinfo.read_text().splitlines()
+                 if line.startswith("model name")]
+        model = names[0] if names else model
+    return {"cpu": model, "arch": platform.machine(), "torch": torch.__version__,
+            "torch_cpu_capability": torch.backends.cpu.get_cpu_capability(), "torch_threads": torch.get_num_threads()}
+
+
+def move_speed(
+    metrics_path: Path, speed_path: Path, speed_keys: Iterable[str], made_on: dict[str, Any] | None = None
+) -> dict[str, Any]:
+    """Rewrite metrics_path without `speed_keys` and write them to speed_path (both atomically), with `made_on`
+    (see `machine`) under "machine" if given; returns the speed file's contents."""
     results, speed = split(json.loads(Path(metrics_path).read_text()), speed_keys)
+    if made_on is not None:
+        speed["machine"] = made_on
     write_json(speed_path, speed)
     write_json(metrics_path, results)
     return speed

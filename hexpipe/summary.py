@@ -77,6 +77,7 @@ def build_summary(params: Params, collect_report: Path, root: Path) -> str:
         lines += [f"Modality: `{vae_cfg.modality}`, latent size {vae_cfg.latent_dim}, beta {vae_cfg.beta}.", "",
                   "| metric | value |", "|---|---|"]
         lines += [f"| {k} | {_fmt(v)} |" for k, v in flat.items() if v is not None]
+        lines += _made_on(vae)
         images = vae_dir / "plots" / "images"
         lines += ["", _image(images / "recon_grid.png", root, "inputs and reconstructions"), "",
                   _image(images / "latent_map.png", root, "latent map"), ""]
@@ -95,6 +96,7 @@ def build_summary(params: Params, collect_report: Path, root: Path) -> str:
                   f"{'on' if params.ppo.randomize else 'off'}; {'blind' if params.ppo.blind else 'with the encoder'}.",
                   "", "| metric | value |", "|---|---|"]
         lines += [f"| {k} | {_fmt(v)} |" for k, v in rows.items() if v is not None]
+        lines += _made_on(ppo)
         lines += ["", _image(ppo_dir / "training_curve.png", root, "episode reward and success against timesteps"), ""]
 
     lines += ["## 4. evaluate: terrain never seen in training", ""]
@@ -117,6 +119,16 @@ def build_summary(params: Params, collect_report: Path, root: Path) -> str:
         for png in sorted(eval_dir.glob("*.png")):
             lines += [_image(png, root, png.stem), ""]
     return "\n".join(lines) + "\n"
+
+
+def _made_on(stage: dict) -> list[str]:
+    """One line naming the CPU a stage computed on (its speed file's "machine"), or nothing for older files."""
+    made = stage.get("machine")
+    if not isinstance(made, dict):
+        return []
+    return ["", f"Computed on {made.get('cpu')} ({made.get('arch')}, torch {made.get('torch')} dispatching "
+                f"{made.get('torch_cpu_capability')} kernels, {made.get('torch_threads')} threads): weights are "
+                "bit-identical only on a CPU of the same kind (README, Reproducibility)."]
 
 
 def write_summary(params: Params, collect_report: Path, out: Path) -> Path:

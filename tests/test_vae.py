@@ -298,6 +298,7 @@ def test_end_to_end_outputs(trained: tuple[VaeConfig, dict[str, float]]) -> None
     assert summary["val"]["loss"] == pytest.approx(metrics["val/loss"])
     speed = json.loads((report / "speed.json").read_text())
     assert speed["train"]["images_per_s"] > 0 and "images_per_s" not in summary["train"]  # timings apart
+    assert speed["machine"]["torch_threads"] >= 1 and "machine" not in summary  # where it ran, beside the timings
     for name in ("recon_grid.png", "latent_map.png"):
         assert (report / "plots" / "images" / name).stat().st_size > 1000
     for name in ("train/recon", "train/kl", "train/loss", "val/recon", "val/kl", "val/loss"):

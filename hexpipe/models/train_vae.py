@@ -55,7 +55,7 @@ from hexpipe.models.vae_data import VaeDataset, load_dataset, note_unlisted, spl
 from hexpipe.models.vae_report import latent_map, recon_grid, rise_probe_figure
 from hexpipe.provenance import code_fingerprint
 from hexpipe.recording.reader import Frame
-from hexpipe.speed import SPEED_JSON, move_speed
+from hexpipe.speed import SPEED_JSON, machine, move_speed
 
 CHECKPOINT = "checkpoint.pt"
 CHECKPOINT_VERSION = 1
@@ -397,7 +397,7 @@ def train_vae(cfg: VaeConfig, frames: Iterable[Frame] | None = None) -> dict[str
         if name not in epoch_keys:
             live.log_metric(name, value, plot=False)
     live.end()
-    move_speed(report_dir / "metrics.json", report_dir / SPEED_JSON, ("train/images_per_s",))  # results only
+    move_speed(report_dir / "metrics.json", report_dir / SPEED_JSON, ("train/images_per_s",), machine())  # results only
     console.log(
         f"val loss {metrics['val/loss']:.2f} (recon {metrics['val/recon']:.2f}, KL {metrics['val/kl']:.2f}); "
         f"probe {probe_accuracy:.3f} vs baseline {probe_baseline:.3f} (threshold probe {threshold_accuracy:.3f}); "

@@ -34,7 +34,7 @@ from hexpipe.rl.curriculum import Curriculum, CurriculumStats
 from hexpipe.rl.features import Encoder, TerrainEmbedding, TerrainFeatures
 from hexpipe.rl.inference import export_weights
 from hexpipe.rl.rollout import RolloutPolicy
-from hexpipe.speed import SPEED_JSON, move_speed
+from hexpipe.speed import SPEED_JSON, machine, move_speed
 from hexpipe.workers import die_with_parent
 
 POLICY_CONFIG = "policy.json"
@@ -294,7 +294,7 @@ def train_ppo(params: Params, resume: bool = False, show_progress: bool = True) 
             live.log_metric(name, value, plot=False)
     live.make_summary()
     live.end()
-    move_speed(report_dir / "metrics.json", report_dir / SPEED_JSON, PPO_SPEED)  # results only in metrics.json
+    move_speed(report_dir / "metrics.json", report_dir / SPEED_JSON, PPO_SPEED, machine())  # results only in metrics
     training_curve(stats.episodes, report_dir / "training_curve.png")
     venv.close()
     return metrics
