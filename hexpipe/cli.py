@@ -305,6 +305,10 @@ def sweep(
     cpus: Annotated[int | None, typer.Option(min=0, help="CPUs of the local Ray cluster (0 = all)")] = None,
     address: Annotated[str | None, typer.Option(
         help="join this Ray cluster (host:port or 'auto'; default $RAY_ADDRESS, else start a local one)")] = None,
+    train_encoder: Annotated[bool | None, typer.Option(
+        "--train-encoder/--pipeline-encoder",
+        help="each trial trains its own encoder with vae.seed = its seed (sweep.train_encoder), or all load "
+             "ppo.encoder_dir")] = None,
     dry_run: Annotated[bool, typer.Option("--dry-run", help="list the trials and exit")] = False,
 ) -> None:
     """Train and evaluate every condition x seed of the `sweep:` params on Ray; report success with intervals."""
@@ -325,11 +329,14 @@ def sweep(
             extra.append(f"sweep.conditions={json.dumps(dict(parse_condition(c) for c in condition))}")
         if compare:
             extra.append(f"sweep.compare={json.dumps([c.split(',') for c in compare])}")
+        if train_encoder is not None:
+            extra.append(f"sweep.train_encoder={str(train_encoder).lower()}")
         cfg = apply_overrides(cfg, extra, source="hexpipe sweep") if extra else cfg
         if dry_run:
             for trial in expand(cfg):
-                console.print(f"{trial.name}: {' '.join(trial.overrides) or '(no overrides)'}; {trial.cpus} CPUs",
-                              highlight=False, markup=False)
+                encoder = f"; trains encoder {trial.encoder}" if trial.encoder else ""
+                console.print(f"{trial.name}: {' '.join(trial.overrides) or '(no overrides)'}{encoder}; "
+                              f"{trial.cpus} CPUs", highlight=False, markup=False)
             return
         try:
             outcome, out_dir = run_sweep(cfg, shlex.join(["hexpipe", *sys.argv[1:]]), address=address, cpus=cpus,

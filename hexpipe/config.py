@@ -349,6 +349,10 @@ class SweepConfig(_Section):
     compare: tuple[tuple[str, str], ...] = ()  # (a, b): P(a beats b); empty: every condition against the first
     cpus: Annotated[int, Field(ge=0)] = 0  # CPUs of the local Ray cluster; 0 = all of this machine's
     record: bool = False  # keep evaluate's videos and MCAP logs for every trial (eval.record_video, log_episodes)
+    # Each trial trains its own encoder from vae.data_dir (the pipeline's rollouts) with vae.seed = the trial's seed
+    # and the condition's vae.* settings, so the spread over seeds includes the encoder's draw, not only PPO's.
+    # Trials that need the same encoder share one. Off: every trial loads ppo.encoder_dir (the pipeline's encoder).
+    train_encoder: bool = False
     flat_terrain: str = "flat"  # the terrain of the Pareto plot (success against cost of transport)
     confidence: Annotated[float, Field(gt=0.5, lt=1)] = 0.95  # of every interval
     resamples: Annotated[int, Field(ge=100)] = 10_000  # bootstrap resamples

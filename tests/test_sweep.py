@@ -88,6 +88,31 @@ def test_grid_expands_conditions_by_seeds_and_refuses_owned_keys(tmp_path):
         load_params(ROOT / "params.yaml", ["eval.workers=0"])
 
 
+def test_trials_that_train_their_encoder_draw_it_with_their_seed(tmp_path):
+    conditions = {"a": [], "b": ["ppo.blind=true"], "c": ["vae.feature_weight=2"]}
+    args = ("sweep.name=g", "sweep.seeds=[3, 4]", f"sweep.conditions={json.dumps(conditions)}")
+    trials = {t.name: t for t in expand(load_params(ROOT / "params.yaml",
+                                                    sets(tmp_path, *args, "sweep.train_encoder=true")))}
+    a3, b3, c3, a4 = trials["a-seed3"], trials["b-seed3"], trials["c-seed3"], trials["a-seed4"]
+    assert a3.params.vae.seed == 3 and a4.params.vae.seed == 4 and c3.params.vae.feature_weight == 2
+    assert a3.params.vae.out_dir == a3.params.ppo.encoder_dir == b3.params.ppo.encoder_dir  # one encoder per recipe
+    assert Path(a3.params.vae.out_dir).parent == tmp_path / "data" / "g" / "encoders"
+    assert Path(a3.params.vae.report_dir).parent == tmp_path / "reports" / "g" / "encoders"
+    assert a3.encoder.startswith("seed3-") and a4.encoder.startswith("seed4-") and c3.encoder.startswith("seed3-")
+    assert a3.encoder[6:] == a4.encoder[6:] != c3.encoder[6:]  # the recipe's hash, whatever the seed
+    plain = {t.name: t for t in expand(load_params(ROOT / "params.yaml", sets(
+        tmp_path, "sweep.name=g", "sweep.seeds=[3, 4]", "sweep.conditions={a: [], b: [ppo.blind=true]}")))}
+    assert plain["a-seed3"].encoder is None and plain["a-seed3"].params.ppo.encoder_dir == "data/models/vae"
+    assert a3.key != plain["a-seed3"].key  # another encoder, another trial
+    with pytest.raises(ConfigError, match=r"'c': vae\.feature_weight changes nothing unless each trial trains its "
+                                          r"encoder \(--train-encoder"):
+        expand(load_params(ROOT / "params.yaml", sets(tmp_path, *args)))
+    for key in ("vae.seed=1", "ppo.encoder_dir=x", "vae.out_dir=x"):
+        owned = load_params(ROOT / "params.yaml", ["sweep.train_encoder=true", f"sweep.conditions={{a: [{key}]}}"])
+        with pytest.raises(ConfigError, match=rf"'a': {key.split('=')[0]} is set by the sweep"):
+            expand(owned)
+
+
 def test_eta_and_time_format():
     assert eta_seconds([], 3, 2) is None and eta_seconds([10.0], 0, 2) == 0.0
     assert eta_seconds([10.0, 20.0], 3, 2) == 30.0  # 15 s a trial, 3 trials two at a time: two rounds
@@ -128,6 +153,39 @@ def test_tiny_sweep_on_local_ray_records_a_failed_trial_and_goes_on(tmp_path, ra
     assert "broken-seed0 | failed" in text and "EncoderError" in text and "2 of 6 trials have no result" in text
     trials = (out / "trials.csv").read_text()
     assert trials.count(",ok,") == 4 and trials.count(",failed,") == 2
+
+
+def test_a_sweep_that_trains_encoders_shares_one_between_conditions(tmp_path, ray_env):
+    from test_vae import _write_rollouts, synthetic_frames
+
+    _write_rollouts(tmp_path / "rollouts", synthetic_frames(episodes=4, steps=8))
+    # "longer" needs the same encoder as "seeing"; with 2 CPUs the two may train it at once: the lock serialises them
+    # (through the CLI in its own process: one process cannot start a second local Ray cluster after the first)
+    args = [*HEXPIPE, "sweep", *cli_args(tmp_path, "--name", "enc", "--seeds", "1", "--train-encoder", "--cpus", "2",
+                                         "--condition", "seeing:", "--condition", "longer:ppo.n_epochs=2",
+                                         "--condition", "heavier:vae.feature_weight=2")]
+    args += [a for s in (f"vae.data_dir={tmp_path / 'rollouts'}", "vae.epochs=1", "vae.batch_size=16")
+             for a in ("--set", s)]
+    run = subprocess.run(args, cwd=ROOT, env=ray_env, capture_output=True, text=True, timeout=300,
+                         start_new_session=True)
+    assert run.returncode == 0, run.stderr[-3000:]
+    out = tmp_path / "reports" / "enc"
+    names = ["heavier-seed1", "longer-seed1", "seeing-seed1"]
+    records = {name: json.loads((out / name / "result.json").read_text()) for name in names}
+    encoders = {name: record["vae"]["encoder"] for name, record in records.items()}
+    assert encoders["seeing-seed1"] == encoders["longer-seed1"] != encoders["heavier-seed1"]
+    made = sorted(p.parent.name for p in (tmp_path / "data" / "enc" / "encoders").glob("*/encoder.pt"))
+    assert made == sorted(set(encoders.values()))
+    config = json.loads((tmp_path / "data" / "enc" / "encoders" / encoders["seeing-seed1"] / "encoder.json")
+                        .read_text())
+    assert config["seed"] == 1
+    for record in records.values():
+        assert "probe/rise_distance_r2" in record["vae"] and record["seconds"]["vae"] > 0  # nan on 4 tiny episodes
+    assert (out / "encoders" / encoders["heavier-seed1"] / "metrics.json").is_file()
+    text = (out / "report.md").read_text()
+    assert "| trial | encoder | distance R² | height R² | status |" in text
+    assert f"| seeing-seed1 | `{encoders['seeing-seed1']}` | " in text
+    assert "also trains its own encoder with `vae.seed`" in text
 
 
 def _wait_for(predicate, timeout: float, proc: subprocess.Popen | None = None) -> None:

@@ -185,6 +185,21 @@ def _one_line(exc: pytest.ExceptionInfo[BaseException]) -> str:
     return message
 
 
+def test_threads_honour_a_limit_and_omp_num_threads(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Two trainings that each take every core crawl; a sweep trial or OMP_NUM_THREADS caps them."""
+    before = torch.get_num_threads()
+    try:
+        monkeypatch.setattr(stage.os, "sched_getaffinity", lambda _: {0, 1, 2, 3})
+        monkeypatch.delenv("OMP_NUM_THREADS", raising=False)
+        assert stage.configure_threads() == 4 and stage.configure_threads(2) == 2 and stage.configure_threads(9) == 4
+        monkeypatch.setenv("OMP_NUM_THREADS", "1")
+        assert stage.configure_threads() == 1 and stage.configure_threads(3) == 3  # an explicit limit wins
+        monkeypatch.setenv("OMP_NUM_THREADS", "many")  # not a number: OpenMP ignores it, and so do we
+        assert stage.configure_threads() == 4
+    finally:
+        torch.set_num_threads(before)
+
+
 def test_no_frames_is_a_clear_error() -> None:
     with pytest.raises(VaeDataError) as exc:
         build_dataset(iter(()), "heightmap", 32, source="data/rollouts")

@@ -64,14 +64,27 @@ _EPOCH_KEYS = ("train/recon", "train/kl", "train/loss", "val/recon", "val/kl", "
 _RISE_KEYS = ("train/rise", "val/rise")  # the aux head's loss, logged only when it trains (feature_weight > 0)
 
 
-def configure_threads() -> int:
-    """Use every core this process may run on (2 on the reference machine); returns the thread count."""
+def configure_threads(limit: int | None = None) -> int:
+    """Use every core this process may run on (2 on the reference machine), but no more than `limit` or, without
+    one, $OMP_NUM_THREADS: two trainings that each take every core slow each other down many times over, not two.
+    Returns the thread count."""
     try:
         cores = len(os.sched_getaffinity(0))
     except AttributeError:  # not on Linux
         cores = os.cpu_count() or 1
-    torch.set_num_threads(max(1, cores))
+    if limit is None:
+        limit = _env_threads()
+    torch.set_num_threads(max(1, min(cores, limit) if limit else cores))
     return torch.get_num_threads()
+
+
+def _env_threads() -> int | None:
+    """$OMP_NUM_THREADS as a positive int, or None when unset or not one (OpenMP ignores such values too)."""
+    try:
+        value = int(os.environ.get("OMP_NUM_THREADS", ""))
+    except ValueError:
+        return None
+    return value if value > 0 else None
 
 
 def objective(
@@ -254,10 +267,12 @@ def _train_epoch(
     }
 
 
-def train_vae(cfg: VaeConfig, frames: Iterable[Frame] | None = None) -> dict[str, float]:
-    """Run the stage; frames=None reads cfg.data_dir. Returns the final metrics (as in metrics.json, flat)."""
-    console = Console()
-    threads = configure_threads()
+def train_vae(cfg: VaeConfig, frames: Iterable[Frame] | None = None, threads: int | None = None,
+              console: Console | None = None) -> dict[str, float]:
+    """Run the stage; frames=None reads cfg.data_dir; threads caps torch's threads (see configure_threads).
+    Returns the final metrics (as in metrics.json, flat)."""
+    console = console or Console()
+    threads = configure_threads(threads)
     if frames is None:
         note_unlisted(Path(cfg.data_dir), console)
     data = load_dataset(cfg, frames)

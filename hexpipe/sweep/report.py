@@ -135,6 +135,10 @@ def _fmt(cell: Cell, key: str, spec: str) -> str:
     return value
 
 
+def _r2(value: float) -> str:
+    return f"{value:.3f}" if isinstance(value, float) and np.isfinite(value) else "-"
+
+
 def _table(header: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
     lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     return "\n".join(lines + ["| " + " | ".join(r) + " |" for r in rows])
@@ -229,15 +233,23 @@ def markdown(report: SweepReport, front: list[str] | None) -> str:
                             str(cell["seeds"]), str(cell["episodes"])))
     improvement = [(pair.replace("_vs_", " > "), terrain, _fmt(cell, "probability", ".2f"))
                    for pair, row in report.improvement.items() for terrain, cell in row.items()]
-    trials = [(r.trial, r.status, f"{r.seconds:.0f}" if isinstance(r.seconds, float) and np.isfinite(r.seconds)
+    own_encoders = "encoder" in report.trials
+    trials = [(r.trial, *((f"`{r.encoder}`", _r2(r.distance_r2), _r2(r.height_r2)) if own_encoders else ()),
+               r.status, f"{r.seconds:.0f}" if isinstance(r.seconds, float) and np.isfinite(r.seconds)
                else "-", str(r.host) if isinstance(r.host, str) else "-",
                str(r.error).replace("|", "/") if isinstance(r.error, str) else "")
               for r in report.trials.itertuples()]
+    trial_header = ("trial", *(("encoder", "distance R²", "height R²") if own_encoders else ()), "status",
+                    "seconds", "host", "error")
     parts = [
         f"# Sweep `{report.name}`",
         f"Produced by:\n\n```\n{report.command}\n```",
-        f"Each trial trains PPO with its own seed (`ppo.seed`) and evaluates the policy on the same seeded episodes "
-        f"(`eval.seed`). Seeds: {', '.join(map(str, report.seeds))}.\n\n"
+        "Each trial trains PPO with its own seed (`ppo.seed`) and evaluates the policy on the same seeded episodes "
+        "(`eval.seed`). "
+        + ("Each trial also trains its own encoder with `vae.seed` = its seed (`sweep.train_encoder`): the spread "
+           "over seeds includes the encoder's draw; the Trials table names each encoder and its rise probes. "
+           if own_encoders else "")
+        + f"Seeds: {', '.join(map(str, report.seeds))}.\n\n"
         + _table(("condition", "overrides", "trials", "complete"), grid),
         "## Success, time to goal and cost of transport\n\n"
         f"Intervals are {level}. **success (episodes)**: every episode of every seed pooled, Wilson score interval "
@@ -273,8 +285,9 @@ def markdown(report: SweepReport, front: list[str] | None) -> str:
                        f"{report.flat_terrain}.png)\n\nOn the Pareto front (success over the suite, cost of "
                        f"transport on {report.flat_terrain}): {', '.join(front) or 'none'}.")
     parts.append("## Figures\n\n" + "\n\n".join(figures))
-    parts.append("## Trials\n\n" + _table(("trial", "status", "seconds", "host", "error"), trials)
-                 + "\n\nPer-trial reports: `TRIAL/ppo/` and `TRIAL/eval/` beside this file.")
+    parts.append("## Trials\n\n" + _table(trial_header, trials)
+                 + "\n\nPer-trial reports: `TRIAL/ppo/` and `TRIAL/eval/` beside this file"
+                 + (", each encoder's in `encoders/ENCODER/`." if own_encoders else "."))
     if report.notes:
         parts.append("## Notes\n\n" + "\n".join(f"- {n}" for n in report.notes))
     return "\n\n".join(parts) + "\n"

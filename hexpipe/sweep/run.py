@@ -28,6 +28,10 @@ def trials_frame(params: Params, trials: list[Trial], outcome: Outcome) -> pd.Da
                      "host": record.get("host") if record else None, "node": record.get("node") if record else None,
                      "code": record.get("code") if record else None,
                      "error": failure["error"] if failure and not record else None})
+        if trial.encoder is not None:  # the encoder it trained and the latent's rise probes (R², held-out frames)
+            vae = (record or {}).get("vae", {})
+            rows[-1] |= {"encoder": trial.encoder, "distance_r2": vae.get("probe/rise_distance_r2", float("nan")),
+                         "height_r2": vae.get("probe/rise_height_r2", float("nan"))}
     return pd.DataFrame(rows)
 
 

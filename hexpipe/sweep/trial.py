@@ -1,4 +1,5 @@
-"""One trial: train-ppo then evaluate under the trial's Params, and the record of what it measured.
+"""One trial: (train-vae, with sweep.train_encoder,) train-ppo then evaluate under the trial's Params, and the record
+of what it measured.
 
 Runs wherever Ray puts it (a worker process, maybe on another node) or in-process; it only needs the project
 folder at the same path (relative paths in the params, such as ppo.encoder_dir, resolve against it).
@@ -6,6 +7,7 @@ folder at the same path (relative paths in the params, such as ppo.encoder_dir, 
 
 from __future__ import annotations
 
+import fcntl
 import json
 import os
 import socket
@@ -14,6 +16,9 @@ from pathlib import Path
 from typing import Any
 
 from hexpipe.config import Params
+
+# the encoder's report figures a trial record keeps (train-vae's metrics.json keys)
+ENCODER_METRICS = ("probe/rise_distance_r2", "probe/rise_height_r2", "probe_accuracy", "val/recon", "val/kl")
 
 # evaluate's per-episode columns the sweep keeps, read by name (results.csv may gain columns)
 EPISODE_COLUMNS = ("terrain", "controller", "episode", "seed", "success", "termination", "distance", "time",
@@ -41,16 +46,38 @@ def run_trial(params: Params, root: str | None = None) -> dict[str, Any]:
     if root is not None:
         os.chdir(root)
     started = time.perf_counter()
+    encoder = train_encoder(params) if params.sweep.train_encoder else None
+    encoded = time.perf_counter()
     metrics = train_ppo(params, resume=True, show_progress=False)
     trained = time.perf_counter()
     evaluate(params, show_progress=False)
     finished = time.perf_counter()
     return {
-        "seconds": {"train": trained - started, "evaluate": finished - trained, "total": finished - started},
+        "seconds": {"vae": encoded - started, "train": trained - encoded, "evaluate": finished - trained,
+                    "total": finished - started},
         "host": socket.gethostname(), "node": _node_id(), "code": code_fingerprint(),
+        **({"vae": encoder} if encoder is not None else {}),
         "ppo": {k: v for k, v in metrics.items() if not k.startswith("time/") and v is not None},
         "episodes": read_episodes(Path(params.eval.report_dir) / "results.csv"),
     }
+
+
+def train_encoder(params: Params) -> dict[str, Any]:
+    """train-vae into the trial's vae.out_dir, on as many threads as the trial reserves. One trial at a time per
+    encoder (a lock file beside it): a second trial that needs the same encoder finds the finished checkpoint and
+    only re-exports it. Returns the encoder's name and its report figures."""
+    from rich.console import Console
+
+    from hexpipe.models.train_vae import train_vae
+    from hexpipe.sweep.grid import Trial
+
+    out = Path(params.vae.out_dir)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    threads = Trial("", 0, (), params).cpus
+    with open(out.parent / f"{out.name}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes, also if this process dies
+        metrics = train_vae(params.vae, threads=threads, console=Console(quiet=True))
+    return {"encoder": out.name, **{k: metrics[k] for k in ENCODER_METRICS if k in metrics}}
 
 
 def _node_id() -> str | None:
