@@ -294,6 +294,10 @@ class PpoConfig(_Section):
     # the policy's forward pass while collecting: the same network in numpy (hexpipe/rl/rollout.py, a faster learner
     # on 2 cores), or SB3's torch one (other random draws, so other runs than numpy's for the same seed)
     rollout_forward: Literal["torch", "numpy"] = "numpy"
+    # the embedding also carries the VAE's rise head read out of the latent (predicted distance to the next rise,
+    # its height, "a rise in range"; rise_head.pt beside the encoder, vae.feature_weight > 0): the same information,
+    # laid on the same axes whichever encoder the VAE's seed drew (issue 10: the encoder's draw moved adaptation)
+    rise_readout: bool = False
     checkpoint_every: PositiveInt = 20_000
     encoder_dir: str = "data/models/vae"
     out_dir: str = "data/models/ppo"
@@ -308,6 +312,8 @@ class PpoConfig(_Section):
                 f"train_terrains has {len(self.train_terrains)} terrains but n_envs={self.n_envs}: each env runs "
                 f"one terrain, so set n_envs >= {len(self.train_terrains)}"
             )
+        if self.blind and self.rise_readout:
+            raise ValueError("rise_readout reads the terrain encoder, which a blind policy (blind: true) has not")
         return self
 
 

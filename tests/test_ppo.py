@@ -145,3 +145,34 @@ def test_a_privileged_critic_trains_resumes_and_exports_an_actor_with_the_usual_
     expected, _ = trained.policy.predict(np.concatenate([x, hidden], axis=1), deterministic=True)
     np.testing.assert_array_equal(policy.predict(obs), expected.reshape(-1))
     env.close()
+
+
+def test_a_rise_readout_policy_sees_the_heads_predictions_and_evaluate_rebuilds_them(tmp_path):
+    """ppo.rise_readout: 3 more inputs (the exported rise head on the latent mean), recorded in policy.json, so that
+    evaluate's loader appends the same read-out whatever params it is given."""
+    import torch
+
+    from hexpipe.config import ConfigError
+    from hexpipe.envs.hexapod import HexapodEnv
+    from hexpipe.rl.policy import load_policy
+
+    torch.manual_seed(0)
+    model = ConvVAE(in_channels=1, image_size=32, latent_dim=8)
+    head = torch.nn.Linear(8, 3)
+    export_encoder(model, tmp_path / "vae", encoder_config(model, "heightmap", (32, 32)), head)
+    params = tiny(tmp_path, "ppo.n_envs=1", "ppo.rise_readout=true", "ppo.total_timesteps=128")
+    train_ppo(params, show_progress=False)
+    config = json.loads((tmp_path / "ppo" / "policy.json").read_text())
+    assert config["observation_dim"] == 28 and config["latent_dim"] == 11 and config["rise_readout"]
+    policy = load_policy(tmp_path / "ppo", tiny(tmp_path, "ppo.n_envs=1"))  # params without the setting
+    env = HexapodEnv.from_params(policy.params, "single_block", obs_sensors=policy.sensors)
+    obs, _ = env.reset(seed=0)
+    features = policy.features(obs)
+    latent = features[0, 17:25]
+    with torch.no_grad():
+        expected = head(torch.from_numpy(latent[None])).numpy()[0]
+    assert features.shape == (1, 28)
+    np.testing.assert_allclose(features[0, 25:], expected, rtol=1e-5, atol=1e-6)
+    env.close()
+    with pytest.raises(ConfigError, match=r"rise_readout reads the terrain encoder"):
+        tiny(tmp_path, "ppo.blind=true", "ppo.rise_readout=true")

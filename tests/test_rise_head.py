@@ -99,7 +99,35 @@ def test_the_head_makes_the_rise_linearly_readable(tmp_path: Path) -> None:
     for name in ("rise_distance_r2", "rise_height_r2"):
         assert aux[f"probe/{name}"] > plain[f"probe/{name}"], name
     saved = json.loads((Path(aux_cfg.out_dir) / "encoder.json").read_text())
-    assert saved["latent_dim"] == 8 and "head" not in json.dumps(saved)  # the export is the plain encoder
+    assert saved["latent_dim"] == 8 and saved["rise_head_outputs"] == 3  # the encoder as before; the head beside it
+    state = torch.load(Path(aux_cfg.out_dir) / "encoder.pt", weights_only=True)
+    assert all(key.startswith(("conv.", "head.")) for key in state)  # the encoder's own head (mu, logvar) only
+
+
+def test_the_rise_readout_appends_the_heads_predictions(tmp_path: Path) -> None:
+    """ppo.rise_readout: the embedding is the latent mean, then the exported head applied to it; an encoder trained
+    without a head (feature_weight 0) has none to read, and says so in one line. A retrain without a head removes
+    the old one, so a head never outlives its encoder."""
+    from hexpipe.models.vae import EncoderError, load_encoder
+
+    aux_cfg = _cfg(tmp_path, "aux", feature_weight=2.0, epochs=1)
+    train_vae(aux_cfg, frames("heightmap", episodes=6))
+    out = Path(aux_cfg.out_dir)
+    batch = np.stack([f.sensors["heightmap"] for f in frames("heightmap", episodes=1)])
+    plain, read = load_encoder(out).encode(batch), load_encoder(out, rise_readout=True)
+    assert read.latent_dim == 11
+    embedded = read.encode(batch)
+    head = torch.load(out / "rise_head.pt", weights_only=True)
+    expected = plain @ head["weight"].numpy().T + head["bias"].numpy()
+    np.testing.assert_array_equal(embedded[:, :8], plain)
+    np.testing.assert_allclose(embedded[:, 8:], expected, rtol=1e-5, atol=1e-6)
+
+    train_vae(_cfg(tmp_path, "aux", feature_weight=0.0, epochs=1), frames("heightmap", episodes=6))
+    assert not (out / "rise_head.pt").exists()
+    with pytest.raises(EncoderError) as err:
+        load_encoder(out, rise_readout=True)
+    assert "no rise head" in str(err.value) and "vae.feature_weight > 0" in str(err.value)
+    assert "\n" not in str(err.value)
 
 
 def test_resume_restores_the_head(tmp_path: Path) -> None:

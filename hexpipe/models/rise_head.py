@@ -3,7 +3,8 @@
 Why: a plain VAE spends its 8 dims on reconstruction. The rise ahead is in the latent but not linearly (ridge R²
 0.55 for its distance and 0.04 for its height on the 100-episode pilot data, kNN 0.83 and 0.64), while the gait needs
 it readable. A linear head on mu, trained with the VAE at weight `vae.feature_weight`, pulls these quantities onto
-linear directions of the latent. The head is not exported: the frozen encoder still returns the 8-d mean.
+linear directions of the latent. The frozen encoder still returns the 8-d mean; train-vae exports the head beside it
+(rise_head.pt), and a policy with ppo.rise_readout reads the head's predictions after the mean.
 
 With `vae.profile_weight` > 0 the head also predicts the terrain profile: the highest cell in each of
 `vae.profile_bands` equal bands of the map's rows, across the legs' corridor. Why: the rise targets are all ahead,

@@ -365,6 +365,7 @@ def train_vae(cfg: VaeConfig, frames: Iterable[Frame] | None = None, threads: in
         model,
         out_dir,
         encoder_config(model, cfg.modality, data.input_shape, beta=cfg.beta, epochs=len(history), seed=cfg.seed),
+        head,
     )
 
     train_mu, val_mu = latent_means(model, data, train_idx), latent_means(model, data, val_idx)

@@ -24,6 +24,8 @@ from hexpipe.models.weights import WeightsError, load_state_dict, save_state_dic
 
 ENCODER_WEIGHTS = "encoder.pt"
 ENCODER_CONFIG = "encoder.json"
+RISE_HEAD_WEIGHTS = "rise_head.pt"  # the training-only rise head, exported for ppo.rise_readout
+RISE_HEAD_OUTPUTS = "rise_head_outputs"  # encoder.json key: the head's output count (0: none exported)
 ENCODER_FORMAT_VERSION = 1
 
 # Encoder widths of the 4 stride-2 conv layers; the decoder mirrors them. 32-64-64-128 trained at only ~410-470
@@ -220,21 +222,34 @@ def encoder_config(model: ConvVAE, modality: str, input_shape: Sequence[int], **
     }
 
 
-def export_encoder(model: ConvVAE, out_dir: str | Path, config: dict[str, Any]) -> None:
-    """Write <out_dir>/encoder.pt (encoder state_dict only) and encoder.json, each atomically."""
+def export_encoder(model: ConvVAE, out_dir: str | Path, config: dict[str, Any], head: nn.Linear | None = None) -> None:
+    """Write <out_dir>/encoder.pt (encoder state_dict only) and encoder.json, each atomically, and the rise head
+    as rise_head.pt (or remove an older one: a head must never outlive the encoder it was trained with)."""
     out = Path(out_dir)
+    if head is None:
+        (out / RISE_HEAD_WEIGHTS).unlink(missing_ok=True)
+    else:
+        save_state_dict(head.state_dict(), out / RISE_HEAD_WEIGHTS)
     save_state_dict(model.encoder.state_dict(), out / ENCODER_WEIGHTS)
-    write_text(out / ENCODER_CONFIG, json.dumps(config, indent=2) + "\n")
+    write_text(out / ENCODER_CONFIG, json.dumps({**config, RISE_HEAD_OUTPUTS: 0 if head is None else head.out_features},
+                                                indent=2) + "\n")
 
 
 class FrozenEncoder:
-    """The trained encoder for inference: raw sensor arrays in, posterior means out; never trains."""
+    """The trained encoder for inference: raw sensor arrays in, posterior means out; never trains.
 
-    def __init__(self, encoder: ConvEncoder, config: dict[str, Any]) -> None:
+    With a `readout` (the VAE's rise head, `load_encoder(..., rise_readout=True)`) each embedding is the mean
+    followed by the head's outputs: the predicted distance to the next rise and its height (standardised), the
+    logit of "a rise in range" (and, with vae.profile_weight, the band heights). `latent_dim` is then the length
+    of that whole embedding, which is what the policy's input counts.
+    """
+
+    def __init__(self, encoder: ConvEncoder, config: dict[str, Any], readout: nn.Linear | None = None) -> None:
         self._net = encoder.eval().requires_grad_(False)
+        self._readout = None if readout is None else readout.eval().requires_grad_(False)
         self.config = config
         self.modality: str = config["modality"]
-        self.latent_dim: int = int(config["latent_dim"])
+        self.latent_dim: int = int(config["latent_dim"]) + (0 if readout is None else readout.out_features)
         self.image_size: int = int(config["image_size"])
         self.input_shape: tuple[int, ...] = tuple(config["input_shape"])
         self.normalisation = Normalisation(**config["normalisation"])
@@ -253,11 +268,14 @@ class FrozenEncoder:
         x = preprocess(batch, self.modality, self.image_size, self.normalisation)
         with torch.inference_mode():
             mu, _ = self._net(torch.from_numpy(x))
+            if self._readout is not None:
+                mu = torch.cat([mu, self._readout(mu)], dim=1)
         return mu.numpy().astype(np.float32, copy=False)
 
 
-def load_encoder(directory: str | Path) -> FrozenEncoder:
-    """Rebuild the exported encoder from <directory>/encoder.{pt,json}, in eval mode with gradients off."""
+def load_encoder(directory: str | Path, rise_readout: bool = False) -> FrozenEncoder:
+    """Rebuild the exported encoder from <directory>/encoder.{pt,json}, in eval mode with gradients off;
+    rise_readout: append the rise head's outputs (<directory>/rise_head.pt) to each embedding."""
     directory = Path(directory)
     weights, cfg_path = directory / ENCODER_WEIGHTS, directory / ENCODER_CONFIG
     for path in (cfg_path, weights):
@@ -279,10 +297,28 @@ def load_encoder(directory: str | Path) -> FrozenEncoder:
         raise EncoderError(str(exc)) from None
     except RuntimeError as exc:  # missing keys or other shapes
         raise EncoderError(f"{weights}: does not match {cfg_path} ({_first_line(exc)})") from None
+    readout = _load_readout(directory, config) if rise_readout else None
     try:
-        return FrozenEncoder(encoder, config)
+        return FrozenEncoder(encoder, config, readout)
     except (KeyError, TypeError, ValueError) as exc:
         raise EncoderError(f"{cfg_path}: unreadable encoder config ({_first_line(exc)})") from None
+
+
+def _load_readout(directory: Path, config: dict[str, Any]) -> nn.Linear:
+    """The rise head train-vae exported beside the encoder, as a frozen Linear(latent_dim, outputs)."""
+    outputs = int(config.get(RISE_HEAD_OUTPUTS) or 0)
+    path = directory / RISE_HEAD_WEIGHTS
+    if outputs <= 0 or not path.is_file():
+        raise EncoderError(f"{directory}: no rise head beside the encoder ({path.name}; train the VAE with "
+                           "vae.feature_weight > 0), which ppo.rise_readout reads")
+    head = nn.Linear(int(config["latent_dim"]), outputs)
+    try:
+        head.load_state_dict(load_state_dict(path))
+    except WeightsError as exc:
+        raise EncoderError(str(exc)) from None
+    except RuntimeError as exc:
+        raise EncoderError(f"{path}: does not match {ENCODER_CONFIG} ({_first_line(exc)})") from None
+    return head
 
 
 def _first_line(exc: BaseException) -> str:

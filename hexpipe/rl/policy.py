@@ -191,7 +191,7 @@ def _load_matching_encoder(directory: Path, config: dict[str, Any], params: Para
                 f"(expected {trained}, found {now}); evaluate with the training sensor settings or {_RETRAIN}"
             )
     try:
-        encoder = load_encoder(encoder_dir)
+        encoder = load_encoder(encoder_dir, rise_readout=bool(config.get("rise_readout", False)))
     except EncoderError as exc:
         raise PolicyError(f"{directory}: the policy's terrain encoder at {encoder_dir} is unusable: {exc}") from None
     if encoder.modality != modality or encoder.latent_dim != int(config["latent_dim"]):

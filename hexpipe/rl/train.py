@@ -89,7 +89,7 @@ def load_terrain_encoder(params: Params):
         return None
     from hexpipe.models.vae import load_encoder
 
-    return load_encoder(params.ppo.encoder_dir)
+    return load_encoder(params.ppo.encoder_dir, rise_readout=params.ppo.rise_readout)
 
 
 class EnvClock(VecEnvWrapper):
@@ -137,13 +137,17 @@ def policy_config(params: Params, encoder, observation_dim: int) -> dict[str, An
         "randomize": params.ppo.randomize,
         "observe_position": params.task.observe_position,
         "privileged_critic": params.ppo.privileged_critic,  # training only: the policy's inputs are the same
+        "rise_readout": params.ppo.rise_readout,
     }
 
 
 def encoder_fingerprint(encoder_dir: str | Path) -> str:
-    """Hash of the exported encoder's files (`encoder*` in the folder): a retrained VAE is another encoder."""
+    """Hash of the exported encoder's files (`encoder*` and its rise head in the folder): a retrained VAE is
+    another encoder."""
+    from hexpipe.models.vae import RISE_HEAD_WEIGHTS
+
     digest = hashlib.sha256()
-    for path in sorted(Path(encoder_dir).glob("encoder*")):
+    for path in sorted([*Path(encoder_dir).glob("encoder*"), Path(encoder_dir) / RISE_HEAD_WEIGHTS]):
         if path.is_file():
             digest.update(path.name.encode() + b"\0" + path.read_bytes() + b"\0")
     return digest.hexdigest()[:16]

@@ -39,8 +39,8 @@ class Trial:
     @property
     def key(self) -> str:
         """Hash of the params the trial reads (train-ppo's and evaluate's, as in dvc.yaml): a stored result is
-        reused only under the same key. collect, vae and the sweep's own section (statistics, --cpus) do not change
-        a trial; the encoder it loads is named by ppo.encoder_dir."""
+        reused only under the same key. collect and the sweep's own section (statistics, --cpus) do not change a
+        trial; the encoder it loads is named by ppo.encoder_dir, and vae counts only when the trial trains it."""
         dump = self.params.model_dump(mode="json", include=TRIAL_SECTIONS)
         dump["collect"] = {"log_every": self.params.collect.log_every}  # evaluate's MCAP logging
         if self.params.sweep.train_encoder:
@@ -54,8 +54,12 @@ class Trial:
 
     @property
     def cpus(self) -> int:
-        """CPUs the trial reserves: its PPO env processes, or evaluate's workers if more."""
-        return max(self.params.ppo.n_envs, self.params.eval.workers)
+        return trial_cpus(self.params)
+
+
+def trial_cpus(params: Params) -> int:
+    """CPUs a trial reserves: its PPO env processes, or evaluate's workers if more (and its encoder's threads)."""
+    return max(params.ppo.n_envs, params.eval.workers)
 
 
 def trial_dirs(params: Params, name: str) -> tuple[Path, Path]:

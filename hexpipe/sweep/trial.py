@@ -69,14 +69,13 @@ def train_encoder(params: Params) -> dict[str, Any]:
     from rich.console import Console
 
     from hexpipe.models.train_vae import train_vae
-    from hexpipe.sweep.grid import Trial
+    from hexpipe.sweep.grid import trial_cpus
 
     out = Path(params.vae.out_dir)
     out.parent.mkdir(parents=True, exist_ok=True)
-    threads = Trial("", 0, (), params).cpus
     with open(out.parent / f"{out.name}.lock", "w") as lock:
         fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes, also if this process dies
-        metrics = train_vae(params.vae, threads=threads, console=Console(quiet=True))
+        metrics = train_vae(params.vae, threads=trial_cpus(params), console=Console(quiet=True))
     return {"encoder": out.name, **{k: metrics[k] for k in ENCODER_METRICS if k in metrics}}
 
 
