@@ -107,6 +107,11 @@ def test_trials_that_train_their_encoder_draw_it_with_their_seed(tmp_path):
     with pytest.raises(ConfigError, match=r"'c': vae\.feature_weight changes nothing unless each trial trains its "
                                           r"encoder \(--train-encoder"):
         expand(load_params(ROOT / "params.yaml", sets(tmp_path, *args)))
+    missing = load_params(ROOT / "params.yaml", sets(tmp_path, *args, "sweep.train_encoder=true",
+                                                     f"vae.data_dir={tmp_path / 'no-rollouts'}"))
+    with pytest.raises(ConfigError, match=r"vae\.data_dir .*no-rollouts: no such folder"):
+        run_sweep(missing, "hexpipe sweep (test)", cpus=1, show_progress=False)  # before Ray starts
+    assert not (tmp_path / "reports" / "g").exists()
     for key in ("vae.seed=1", "ppo.encoder_dir=x", "vae.out_dir=x"):
         owned = load_params(ROOT / "params.yaml", ["sweep.train_encoder=true", f"sweep.conditions={{a: [{key}]}}"])
         with pytest.raises(ConfigError, match=rf"'a': {key.split('=')[0]} is set by the sweep"):

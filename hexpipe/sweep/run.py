@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from hexpipe.config import Params
+from hexpipe.config import ConfigError, Params
 from hexpipe.sweep import tables
 from hexpipe.sweep.grid import Trial, expand
 from hexpipe.sweep.report import SweepReport, write_report
@@ -84,6 +84,9 @@ def run_sweep(
 ) -> tuple[Outcome, Path]:
     """Run every trial of params.sweep that has no complete result, then write reports/sweeps/NAME."""
     trials = expand(params)  # ConfigError before anything runs
+    if params.sweep.train_encoder and not Path(params.vae.data_dir).is_dir():  # else every trial fails alike
+        raise ConfigError(f"vae.data_dir {params.vae.data_dir}: no such folder, and --train-encoder trains each "
+                          "trial's encoder from it (run the collect stage first: dvc repro collect)")
     outcome = run_trials(params, trials, address=address, cpus=params.sweep.cpus if cpus is None else cpus,
                          root=Path.cwd(), show_progress=show_progress, log=log)
     out_dir = Path(params.sweep.report_dir) / params.sweep.name

@@ -2,7 +2,8 @@
 
     .venv/bin/python reports/experiments/encoder_draw/near_probe.py data/sweeps/encoder_draw/encoders/seed*-*/
 
-For each encoder folder (with its checkpoint.pt and encoder.json, as train-vae leaves them) it rebuilds the VAE,
+All the folders must hold encoders of one modality and image size (the first one's are used). For each encoder
+folder (with its checkpoint.pt and encoder.json, as train-vae leaves them) it rebuilds the VAE,
 takes the latent means of every frame of data/rollouts and, on the encoder's own held-out episodes (the split of
 its vae.seed, as train-vae made it), scores linear read-outs fitted on its training episodes:
 - `lift_zone`: logistic probe for "a rise 0-0.3 m ahead" (the zone of issue 10's adaptation figure) against every
@@ -56,7 +57,8 @@ def encoder_scores(folder: Path, data, val_fraction: float) -> dict[str, float]:
 
 def main(folders: list[str]) -> None:
     torch.set_num_threads(1)
-    cfg = VaeConfig()  # the pipeline's defaults: data/rollouts, height maps at 32x32
+    first = json.loads((Path(folders[0]) / "encoder.json").read_text())  # the frames the encoders were trained on
+    cfg = VaeConfig(modality=first["modality"], image_size=int(first["image_size"]))  # from data/rollouts
     data = load_dataset(cfg)
     for folder in folders:
         scores = encoder_scores(Path(folder), data, cfg.val_fraction)
