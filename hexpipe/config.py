@@ -91,7 +91,8 @@ class CpgConfig(_Section):
     """The limit-cycle CPG and the bounds on its parameters (a, b, omega).
 
     a: fore/aft amplitude (rad of hip yaw); b: lift amplitude (rad of shoulder); omega: angular frequency (rad/s).
-    The policy sets the second derivative of (a, b, omega), integrated with the rate and value bounds below.
+    The policy sets the second derivative of (a, b, omega) (the paper's; `action_order: 2`) or their rate
+    (`action_order: 1`), integrated with the rate and value bounds below.
     """
 
     initial: Triple = (0.25, 0.2, 1.5 * math.pi)
@@ -109,7 +110,10 @@ class CpgConfig(_Section):
     # true: each leg lifts at least as high as the front legs did where it now stands (follow the leader), so a lift
     # chosen at a face carries the middle and hind legs over it too (hexpipe/sim/lift_trail.py; the `follow` sweep)
     lift_follows: bool = True
-    accel_limit: Triple = (4.0, 4.0, 40.0)  # action 1.0 maps to this second derivative
+    accel_limit: Triple = (4.0, 4.0, 40.0)  # action 1.0 maps to this second derivative (action_order 2)
+    # 2: the action is d^2/dt^2 (a, b, omega) x accel_limit, the paper's; 1: it is d/dt x rate_limit, so an action held
+    # at 0 holds the gait and a lift is one sustained action, not an acceleration and a brake (issue 10's lever)
+    action_order: Literal[1, 2] = 2
     convergence: PositiveFloat = 10.0  # pull-back gain onto the limit cycle (1/s)
     coupling: PositiveFloat = 4.0  # tripod phase-locking gain (1/s)
 

@@ -102,13 +102,17 @@ def test_advance_plans_a_control_step_like_single_steps():
 
 
 @pytest.mark.parametrize(
-    "cfg", [CpgConfig(fall_rate_limit=None), CpgConfig(fall_rate_limit=(0.5, 0.1, 2.0))], ids=["symmetric", "slow_fall"]
+    "cfg",
+    [CpgConfig(fall_rate_limit=None), CpgConfig(fall_rate_limit=(0.5, 0.1, 2.0)),
+     CpgConfig(fall_rate_limit=(0.5, 0.1, 2.0), action_order=1)],
+    ids=["symmetric", "slow_fall", "first_order"],
 )
 def test_parameter_path_equals_repeated_integration(cfg):
     rng = np.random.default_rng(2)
     values, rates = np.asarray(cfg.initial), np.zeros(3)
-    for _ in range(300):  # random accelerations drive the values into their bounds and back
-        accel = rng.uniform(-1, 1, 3) * np.asarray(cfg.accel_limit)
+    scale = np.asarray(cfg.rate_limit if cfg.action_order == 1 else cfg.accel_limit)
+    for _ in range(300):  # random commands drive the values into their bounds and back
+        accel = rng.uniform(-1, 1, 3) * scale
         path_v, path_r = parameter_path(values, rates, accel, DT, 12, cfg)
         for k in range(12):
             values, rates = integrate_parameters(values, rates, accel, DT, cfg)
@@ -164,6 +168,21 @@ def test_fall_rate_limit_slows_the_fall_alone():
         values, rates = integrate_parameters(values, rates, -down, DT, cfg)
     assert rates[1] == pytest.approx(cfg.rate_limit[1])
     assert CpgConfig(fall_rate_limit=None).falling_limit == CpgConfig().rate_limit
+
+
+def test_a_first_order_command_is_the_rate_at_once_and_zero_holds():
+    cfg = CpgConfig(action_order=1, fall_rate_limit=(1.0, 0.1, 10.0))
+    start = np.array([0.25, 0.3, 4.0])
+    values, rates = parameter_path(start, np.zeros(3), np.array([0.5, 0.5, -2.0]), DT, 24, cfg)
+    assert np.allclose(rates, [0.5, 0.5, -2.0])  # no ramp: the first substep already moves at the commanded rate
+    assert np.allclose(values[-1], start + 24 * DT * np.array([0.5, 0.5, -2.0]))
+    held, held_rates = parameter_path(values[-1], rates[-1], np.zeros(3), DT, 24, cfg)
+    assert np.array_equal(held[-1], values[-1]) and np.allclose(held_rates, 0.0)  # a rate that persists is order 2's
+    _, falling = parameter_path(values[-1], rates[-1], np.array([0.0, -1.0, 0.0]), DT, 24, cfg)
+    assert np.allclose(falling[:, 1], -0.1)  # the fall limit still bounds a commanded fall
+    second = CpgConfig(fall_rate_limit=(1.0, 0.1, 10.0))
+    _, coasting = parameter_path(values[-1], rates[-1], np.zeros(3), DT, 24, second)
+    assert np.allclose(coasting[-1], rates[-1])  # under order 2 the same zero command keeps the rate
 
 
 def test_holding_lowers_only_the_floors_a_fixed_gait_needs():

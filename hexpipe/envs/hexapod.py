@@ -1,4 +1,5 @@
-"""`hexpipe/Hexapod-v0`: the paper's POMDP. The policy sets the second derivative of the CPG parameters.
+"""`hexpipe/Hexapod-v0`: the paper's POMDP. The policy sets the second derivative of the CPG parameters (or, with
+`cpg.action_order: 1`, their rate).
 
 Observation (Dict):
 - `body` (13): position relative to the start (x, y; z = base height above the terrain below), orientation
@@ -9,7 +10,8 @@ Observation (Dict):
 - one entry per sensor named in `TaskConfig.sensors`, as the sensor registry (`hexpipe.sensors`) declares it:
   `heightmap` (rows * cols,) float32 m, row-major; `rgb` (H, W, 3) uint8; `contacts` (12,) per-leg contact
   flags then normal forces (N).
-Action: Box [-1, 1]^3, scaled by `CpgConfig.accel_limit` to d^2/dt^2 (a, b, omega).
+Action: Box [-1, 1]^3, scaled by `CpgConfig.accel_limit` to d^2/dt^2 (a, b, omega), or with `action_order: 1` by
+`CpgConfig.rate_limit` to d/dt (a, b, omega).
 Reward: `reward_scale` * forward velocity (m/s, displacement over the control step), as in the paper, minus
 `power_cost` * mean mechanical joint power (W) when that is set (0 is the paper's reward), minus `failure_penalty`
 once when the episode ends stuck or fallen.
@@ -130,7 +132,8 @@ class HexapodEnv(gym.Env):
         self._sensed = self._observed + (["heightmap"] if privileged and "heightmap" not in self._observed else [])
         self._physics = (self.sim_cfg.friction, 1.0)  # (friction, base-mass scale) drawn at reset
         self._corridor = corridor_columns(self.sensor_cfg) if privileged else None
-        self._accel_limit = np.asarray(self.cpg_cfg.accel_limit)
+        order_one = self.cpg_cfg.action_order == 1
+        self._action_scale = np.asarray(self.cpg_cfg.rate_limit if order_one else self.cpg_cfg.accel_limit)
         self._max_joint_step = self.robot_spec.speeds * self.physics_dt
         self.terrain: Terrain | None = None
         self.robot: Robot | None = None
@@ -200,7 +203,7 @@ class HexapodEnv(gym.Env):
 
     def step(self, action: np.ndarray):
         assert self.robot is not None, "call reset() before step()"
-        accel = np.clip(np.asarray(action, dtype=float), -1.0, 1.0) * self._accel_limit
+        command = np.clip(np.asarray(action, dtype=float), -1.0, 1.0) * self._action_scale
         p, c = self._p, self.client
         gains = (self.sim_cfg.position_gain, self.sim_cfg.velocity_gain)
         # The CPG is open loop: plan the whole control step's joint targets at once, then run the physics
@@ -209,7 +212,7 @@ class HexapodEnv(gym.Env):
             x = self._last_x
             self.trail.record(x, float(self.cpg.params[1]))
             floor = self.trail.floor(x)
-        xy = self.cpg.advance(accel, self.physics_dt, self.substeps, floor)
+        xy = self.cpg.advance(command, self.physics_dt, self.substeps, floor)
         targets = slew_path(self._targets, self.gait.joint_targets(xy), self._max_joint_step)
         self._targets = targets[-1]
         self._xy = xy[-1]  # each leg's (x, y) now, with its lift floor (the recorder logs it)

@@ -29,6 +29,7 @@ from hexpipe.validation import one_line
 
 POLICY_SUBDIR = "policy"  # train.py saves the policy files here
 _RETRAIN = "run `hexpipe train-ppo`"
+_ACTION_MEANING = {1: "the rates of a, b, omega", 2: "the second derivatives of a, b, omega"}
 
 
 class PolicyError(ValueError):
@@ -111,6 +112,13 @@ def load_policy(
         raise PolicyError(
             f"{directory}: policy was trained with task.observe_position={str(trained_position).lower()}, params now "
             f"have {str(params.task.observe_position).lower()}; evaluate with the training setting or {_RETRAIN}"
+        )
+    trained_order = (_recorded(config, "cpg") or {}).get("action_order", 2)  # 2 before the setting existed
+    if trained_order != params.cpg.action_order:
+        meaning = _ACTION_MEANING.get(trained_order, "unknown")
+        raise PolicyError(
+            f"{directory}: policy was trained with cpg.action_order={trained_order} (its actions are {meaning}), "
+            f"params now have {params.cpg.action_order}; evaluate with the training setting or {_RETRAIN}"
         )
     encoder = None if blind else _load_matching_encoder(directory, config, params)
     dim = int(config["observation_dim"])

@@ -66,15 +66,17 @@ def locked_states(phases: np.ndarray, phase0: float = 0.0) -> np.ndarray:
 
 
 def integrate_parameters(
-    values: np.ndarray, rates: np.ndarray, accel: np.ndarray, dt: float, cfg: CpgConfig
+    values: np.ndarray, rates: np.ndarray, command: np.ndarray, dt: float, cfg: CpgConfig
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Integrate the second derivative `accel` of (a, b, omega) over dt with the rate and value bounds.
+    """Integrate (a, b, omega) over dt under `command`: their second derivative (cfg.action_order 2, the paper's) or
+    their rate (1), with the rate and value bounds.
 
     A value that reaches a bound stops there with zero rate, so the policy never has to unwind a saturated rate.
     Rates stay within [-cfg.falling_limit, cfg.rate_limit].
     """
     lower, upper, rate_limit = cfg.lower, cfg.upper, cfg.rate_limit
-    rates = np.minimum(np.maximum(rates + accel * dt, np.negative(cfg.falling_limit)), rate_limit)
+    wanted = command if cfg.action_order == 1 else rates + command * dt
+    rates = np.minimum(np.maximum(wanted, np.negative(cfg.falling_limit)), rate_limit)
     values = values + rates * dt
     hit = (values <= lower) | (values >= upper)
     if hit.any():
@@ -84,18 +86,20 @@ def integrate_parameters(
 
 
 def parameter_path(
-    values: np.ndarray, rates: np.ndarray, accel: np.ndarray, dt: float, n: int, cfg: CpgConfig
+    values: np.ndarray, rates: np.ndarray, command: np.ndarray, dt: float, n: int, cfg: CpgConfig
 ) -> tuple[np.ndarray, np.ndarray]:
     """`integrate_parameters` applied n times: (n, 3) values and rates after each substep.
 
     Plain floats: three parameters times a few substeps is cheaper in Python than in small NumPy calls.
     """
     out_v, out_r = np.empty((n, 3)), np.empty((n, 3))
+    first_order = cfg.action_order == 1
     for j in range(3):
-        v, r, acc = float(values[j]), float(rates[j]), float(accel[j]) * dt
+        v, r = float(values[j]), float(rates[j])
+        step = float(command[j]) if first_order else float(command[j]) * dt  # the rate, or its change per substep
         lo, hi, lim, fall = cfg.lower[j], cfg.upper[j], cfg.rate_limit[j], cfg.falling_limit[j]
         for k in range(n):
-            r = min(max(r + acc, -fall), lim)
+            r = min(max(step if first_order else r + step, -fall), lim)
             v += r * dt
             if v <= lo or v >= hi:
                 v, r = min(max(v, lo), hi), 0.0
@@ -125,13 +129,14 @@ class CPG:
             z = np.asarray(z, dtype=float)
             self.w = z[:, 0] + 1j * z[:, 1]
 
-    def advance(self, accel: np.ndarray, dt: float, n: int, lift_floor: np.ndarray | None = None) -> np.ndarray:
-        """Advance n substeps of dt (s) under a constant `accel`; returns (n, 6, 2) joint-space (x, y) (rad).
+    def advance(self, command: np.ndarray, dt: float, n: int, lift_floor: np.ndarray | None = None) -> np.ndarray:
+        """Advance n substeps of dt (s) under a constant `command` (the parameters' second derivative, or their rate
+        with cfg.action_order 1); returns (n, 6, 2) joint-space (x, y) (rad).
 
         lift_floor: optional (6,) lowest lift per leg (rad); a leg swings with the larger of it and b
         (`hexpipe.sim.lift_trail`). The parameters themselves are unchanged.
         """
-        values, rates = parameter_path(self.params, self.rates, accel, dt, n, self.cfg)
+        values, rates = parameter_path(self.params, self.rates, command, dt, n, self.cfg)
         self.params, self.rates = values[-1].copy(), rates[-1].copy()
         key = (dt, n)
         if key not in self._flows:
@@ -142,9 +147,9 @@ class CPG:
         lift = values[:, 1:2] if lift_floor is None else np.maximum(values[:, 1:2], lift_floor[None, :])
         return np.stack([values[:, :1] * z.real, lift * z.imag], axis=-1)
 
-    def step(self, accel: np.ndarray, dt: float) -> np.ndarray:
+    def step(self, command: np.ndarray, dt: float) -> np.ndarray:
         """Advance one substep of dt (s); returns the joint-space (x, y) of every leg (rad)."""
-        return self.advance(accel, dt, 1)[0]
+        return self.advance(command, dt, 1)[0]
 
     @property
     def z(self) -> np.ndarray:
