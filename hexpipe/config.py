@@ -283,6 +283,13 @@ class PpoConfig(_Section):
     clip_range: PositiveFloat = 0.2
     ent_coef: Annotated[float, Field(ge=0)] = 0.0
     net_arch: tuple[PositiveInt, ...] = (64, 64)
+    # the action noise's initial log standard deviation (SB3's log_std_init; 0: std 1 on actions in [-1, 1])
+    log_std_init: float = 0.0
+    # gSDE (SB3's use_sde; Raffin et al. 2022): the noise is a linear function of the actor's last hidden layer,
+    # redrawn every sde_sample_freq steps (-1: once per rollout), so it is smooth in time and alike where the
+    # terrain looks alike: a lift held through the half second before a face is one draw, not ten independent ones
+    use_sde: bool = False
+    sde_sample_freq: Annotated[int, Field(ge=-1)] = -1
     seed: int = 0
     blind: bool = False  # drop the terrain embedding (ablation)
     # `varied` (issue 10): blocks of every height, depth, count and place, flat and rough episodes; the paper
@@ -318,6 +325,9 @@ class PpoConfig(_Section):
             )
         if self.blind and self.rise_readout:
             raise ValueError("rise_readout reads the terrain encoder, which a blind policy (blind: true) has not")
+        if self.use_sde and self.privileged_critic:
+            raise ValueError("use_sde with privileged_critic is not supported: gSDE's noise reads the actor's "
+                             "features, which the asymmetric policy splits from the critic's; set one of them to false")
         return self
 
 

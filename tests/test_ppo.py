@@ -176,3 +176,35 @@ def test_a_rise_readout_policy_sees_the_heads_predictions_and_evaluate_rebuilds_
     env.close()
     with pytest.raises(ConfigError, match=r"rise_readout reads the terrain encoder"):
         tiny(tmp_path, "ppo.blind=true", "ppo.rise_readout=true")
+
+
+def test_gsde_trains_resumes_and_exports_the_same_deterministic_actor(tmp_path):
+    """ppo.use_sde: SB3's state-dependent exploration trains (with SB3's torch forward: the numpy one is a plain
+    Gaussian's), resumes from its checkpoint, and exports an actor whose deterministic actions are the trained
+    model's; gSDE with the asymmetric critic is refused in one line."""
+    from stable_baselines3 import PPO
+
+    from hexpipe.config import ConfigError
+    from hexpipe.envs.hexapod import HexapodEnv
+    from hexpipe.rl.policy import load_policy
+
+    model = ConvVAE(in_channels=1, image_size=32, latent_dim=8)
+    export_encoder(model, tmp_path / "vae", encoder_config(model, "heightmap", (32, 32)))
+    sde = ("ppo.n_envs=1", "ppo.use_sde=true", "ppo.sde_sample_freq=4", "ppo.log_std_init=-2")
+    train_ppo(tiny(tmp_path, *sde, "ppo.total_timesteps=128"), show_progress=False)
+    longer = tiny(tmp_path, *sde)
+    assert train_ppo(longer, resume=True, show_progress=False)["timesteps"] == 256  # the checkpoint reloads
+    trained = PPO.load(tmp_path / "ppo" / "policy" / "model.zip", device="cpu")
+    assert trained.use_sde and trained.sde_sample_freq == 4
+    assert trained.policy.log_std.shape == (64, 3)  # one noise scale per hidden feature and action
+    policy = load_policy(tmp_path / "ppo", longer)
+    env = HexapodEnv.from_params(policy.params, "single_block", obs_sensors=policy.sensors)
+    obs, _ = env.reset(seed=0)
+    for _ in range(3):
+        expected, _ = trained.policy.predict(policy.normaliser(policy.features(obs)), deterministic=True)
+        action = policy.predict(obs)
+        np.testing.assert_array_equal(action, expected.reshape(-1))
+        obs, *_ = env.step(action)
+    env.close()
+    with pytest.raises(ConfigError, match="use_sde with privileged_critic"):
+        tiny(tmp_path, *sde, "ppo.privileged_critic=true")

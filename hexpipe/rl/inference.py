@@ -42,14 +42,32 @@ class ObservationNormaliser:
         return np.clip((x - self.mean) / np.sqrt(self.var + self.epsilon), -self.clip, self.clip).astype(np.float32)
 
 
+def without_sde_noise(policy: Any) -> Any:
+    """A gSDE policy (ppo.use_sde) as a plain ActorCriticPolicy with the same networks: its noise scales (one per
+    hidden feature and action) drive exploration in training only, and the deterministic action never reads them.
+    The copy's log_std is SB3's default (zeros); a policy without gSDE is returned as it is."""
+    if not getattr(policy, "use_sde", False):
+        return policy
+    from stable_baselines3.common.policies import ActorCriticPolicy
+
+    plain = ActorCriticPolicy(policy.observation_space, policy.action_space, lr_schedule=lambda _: 0.0,
+                              net_arch=policy.net_arch, activation_fn=policy.activation_fn)
+    state = plain.state_dict()
+    state.update({k: v for k, v in policy.state_dict().items() if k != "log_std"})
+    plain.load_state_dict(state)
+    plain.set_training_mode(False)
+    return plain
+
+
 def export_weights(model: Any, directory: Path) -> None:
     """Write weights.pt and weights.json for `model` (SB3 PPO, MlpPolicy) and its VecNormalize into `directory`.
 
     An asymmetric policy (ppo.privileged_critic) is written as its actor alone, over the actor's inputs: the
-    privileged features and their normalisation are left out (`asymmetric.actor_only`)."""
+    privileged features and their normalisation are left out (`asymmetric.actor_only`); a gSDE policy is written
+    without its noise scales (`without_sde_noise`)."""
     from hexpipe.rl.asymmetric import actor_only
 
-    policy = actor_only(model.policy)
+    policy = without_sde_noise(actor_only(model.policy))
     dim = int(np.prod(policy.observation_space.shape))
     normaliser = model.get_vec_normalize_env()
     norm = None

@@ -252,14 +252,15 @@ def train_ppo(params: Params, resume: bool = False, show_progress: bool = True) 
         say(f"train-ppo: resuming from {start_from} ({model.num_timesteps} of {cfg.total_timesteps} steps)")
     else:
         venv = VecNormalize(venv, norm_obs=True, norm_reward=True, clip_obs=10.0, gamma=cfg.gamma)
-        kwargs: dict[str, Any] = {"net_arch": list(cfg.net_arch)}
+        kwargs: dict[str, Any] = {"net_arch": list(cfg.net_arch), "log_std_init": cfg.log_std_init}
         if cfg.privileged_critic:  # the critic reads every feature, the actor the leading actor_dim
             kwargs["actor_dim"] = features.actor_dim
         policy = policy_class(cfg.privileged_critic, cfg.rollout_forward == "numpy")
         model = PPO(
             policy, venv, n_steps=cfg.n_steps, batch_size=cfg.batch_size, n_epochs=cfg.n_epochs,
             learning_rate=cfg.learning_rate, gamma=cfg.gamma, gae_lambda=cfg.gae_lambda, clip_range=cfg.clip_range,
-            ent_coef=cfg.ent_coef, policy_kwargs=kwargs, seed=cfg.seed, device="cpu", verbose=0,
+            ent_coef=cfg.ent_coef, use_sde=cfg.use_sde, sde_sample_freq=cfg.sde_sample_freq, policy_kwargs=kwargs,
+            seed=cfg.seed, device="cpu", verbose=0,
         )
 
     live = Live(str(report_dir), dvcyaml=False, save_dvc_exp=False, resume=start_from is not None)
