@@ -7,6 +7,7 @@ whose trials ran in different sweeps: each side pools the records of one or more
 
 --stalls adds the failed episodes on the block courses, counted by where the feet were when each ended;
 --terrains adds each terrain's success, the mean over seeds of each seed's rate.
+--seeds 0,1,2,3 keeps only those training seeds on both sides (a paired comparison with a longer sweep).
 """
 
 import argparse
@@ -21,7 +22,7 @@ BLOCK_COURSES = ("single_block", "extra_blocks", "wide_block", "tall_block", "bl
 STALL_KIND = {"none": "no foot at a face", "-": "time limit", "": "time limit"}
 
 
-def records(sources: list[str], name: str) -> list[dict]:
+def records(sources: list[str], name: str, keep: set[int] | None = None) -> list[dict]:
     """Every trial record of the sources, as condition `name`; a training seed found in two sources is an error
     (the per-seed statistics would merge the two policies into one seed)."""
     out, seen = [], {}
@@ -29,6 +30,8 @@ def records(sources: list[str], name: str) -> list[dict]:
         folder, _, condition = source.rpartition(":")
         for path in sorted(Path(folder).glob(f"{condition}-seed*/result.json")):
             record = json.loads(path.read_text())
+            if keep is not None and record["seed"] not in keep:
+                continue
             if record["seed"] in seen:
                 raise SystemExit(f"error: seed {record['seed']} is in both {seen[record['seed']]} and {source}")
             seen[record["seed"]] = source
@@ -47,8 +50,10 @@ def main() -> None:
                         "by where the feet were (evaluate's stall_legs)")
     parser.add_argument("--terrains", action="store_true", help="also print each terrain's success per side (mean "
                         "over seeds of each seed's success rate)")
+    parser.add_argument("--seeds", help="comma-separated training seeds to keep on both sides (default: all)")
     args = parser.parse_args()
-    episodes = episodes_frame(records(args.a, "a") + records(args.b, "b"))
+    keep = None if args.seeds is None else {int(s) for s in args.seeds.split(",")}
+    episodes = episodes_frame(records(args.a, "a", keep) + records(args.b, "b", keep))
     episodes = episodes[episodes["controller"] == LEARNED]
     terrains = list(dict.fromkeys(episodes["terrain"]))
     result = improvements(per_seed(episodes), [("a", "b")], terrains)["a_vs_b"]["all"]
