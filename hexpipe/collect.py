@@ -1,10 +1,10 @@
 """The collect stage: random-policy rollouts over a terrain mix, logged to MCAP, with a manifest and a report.
 
 As in the paper, the robot walks "with a random policy": every control step draws a random second derivative of
-(a, b, omega) (their rate with `cpg.action_order: 1`) within +-`action_scale`. Episodes are planned up front from (collect.seed, episode index), so the
-dataset is reproducible and a rerun after an interruption only runs the episodes whose files are missing. Each
-file appears under its final name only when complete (see `EpisodeWriter`), and the manifest is rewritten
-atomically after every finished episode: it never lists a file that cannot be read.
+(a, b, omega) (their rate with `cpg.action_order: 1`) within +-`action_scale`. Episodes are planned up front from
+(collect.seed, episode index), so the dataset is reproducible and a rerun after an interruption only runs the
+episodes whose files are missing. Each file appears under its final name only when complete (see `EpisodeWriter`),
+and the manifest is rewritten atomically after every finished episode: it never lists a file that cannot be read.
 """
 
 from __future__ import annotations

@@ -208,3 +208,17 @@ def test_gsde_trains_resumes_and_exports_the_same_deterministic_actor(tmp_path):
     env.close()
     with pytest.raises(ConfigError, match="use_sde with privileged_critic"):
         tiny(tmp_path, *sde, "ppo.privileged_critic=true")
+
+
+def test_a_policy_runs_only_under_the_action_order_it_was_trained_with(tmp_path):
+    from hexpipe.rl.policy import PolicyError, load_policy
+
+    blind = ("ppo.n_envs=1", "ppo.blind=true", "ppo.total_timesteps=64")
+    first = tiny(tmp_path, *blind, "cpg.action_order=1")
+    train_ppo(first, show_progress=False)
+    assert load_policy(tmp_path / "ppo", first).config["cpg"]["action_order"] == 1
+    assert load_policy(tmp_path / "ppo").params.cpg.action_order == 1  # run with its own settings: the trained order
+    with pytest.raises(PolicyError, match=r"trained with cpg\.action_order=1 \(its actions are the rates of a, b, "
+                                          r"omega\), params now have 2") as err:
+        load_policy(tmp_path / "ppo", tiny(tmp_path, *blind))
+    assert "\n" not in str(err.value)
