@@ -174,6 +174,10 @@ class SensorConfig(_Section):
     # centre), so the map shows the face a hind leg must still clear after the body has passed it
     heightmap_ahead: tuple[float, float] = (-0.6, 1.4)
     heightmap_width: PositiveFloat = 1.6  # lateral extent (m)
+    # what a cell's height is measured from: "stance", the nominal stance plane (base z - sim.body_height), which
+    # moves with the body when legs stand on a block; "ground", the terrain under the base, as an elevation map in
+    # the world frame gives it (a block reads its own height wherever the body stands)
+    heightmap_reference: Literal["stance", "ground"] = "stance"
 
     @model_validator(mode="after")
     def _extent_ordered(self) -> SensorConfig:

@@ -118,6 +118,40 @@ def test_heightmap_reaches_behind_the_hind_feet():
     assert np.allclose(hm[row_x < -0.5], 0.0)  # and the ground before its face, where a hind foot stands
 
 
+def test_a_ground_referenced_map_reads_a_block_at_its_height_wherever_the_body_stands():
+    """Between the extra blocks, with the hind legs on the first, the body stands high and the stance-plane map
+    reads the 0.10 m second block lower (reports/experiments/sde/map_reference.py); from the ground under the base
+    it reads 0.10. Over the first block, the ground reference reads the second block level and the gap as a dip."""
+    from hexpipe.sensors.base import SimView
+    from hexpipe.sim.terrain import SCENARIOS, realize
+
+    terrain = realize(SCENARIOS["extra_blocks"], np.random.default_rng(0))
+    ahead = {ref: SENSORS["heightmap"].reader(SensorConfig(heightmap_reference=ref)) for ref in ("stance", "ground")}
+    near, _ = SensorConfig().heightmap_ahead
+    sensor = ahead["stance"]
+    row_x = near + (np.arange(sensor.shape[0]) + 0.5) * sensor.cell_x
+    level = np.array([0.0, 0.0, 0.0, 1.0])
+
+    def read(ref: str, x: float, z: float) -> np.ndarray:
+        return ahead[ref](SimView(0, None, terrain, np.array([x, 0.0, z]), level, 0.24))[:, 16]
+
+    raised = 0.24 + 0.05  # base 1.5 m out, between the blocks, held 5 cm above its nominal height
+    second = (row_x > 0.55) & (row_x < 0.75)  # the second block's top: 2.05-2.25 m
+    np.testing.assert_allclose(read("stance", 1.5, raised)[second], 0.05, atol=1e-6)
+    np.testing.assert_allclose(read("ground", 1.5, raised)[second], 0.10, atol=1e-6)
+    over_first = read("ground", 1.15, 0.10 + 0.20)  # base over the first block, whatever its height above it
+    np.testing.assert_allclose(over_first[(row_x > 0.95) & (row_x < 1.1)], 0.0, atol=1e-6)  # the second: level
+    np.testing.assert_allclose(over_first[(row_x > 0.25) & (row_x < 0.75)], -0.10, atol=1e-6)  # the gap: a dip
+
+    frames = {}
+    for ref in ("stance", "ground"):  # the map's frame in the log, where Foxglove draws its cells
+        env = HexapodEnv("extra_blocks", sensors=SensorConfig(heightmap_reference=ref))
+        env.reset(seed=0)
+        frames[ref] = next(t for t in env.state().transforms if t[1] == "heading")[2][2]
+        env.close()
+    assert frames["ground"] == 0.0 and frames["stance"] != 0.0  # on the ground under the base, or the stance plane
+
+
 def test_truncates_at_time_limit():
     env = HexapodEnv("flat", task=TaskConfig(time_limit=1.0))
     info = rollout(env, seed=0)

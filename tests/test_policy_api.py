@@ -16,7 +16,7 @@ from typer.testing import CliRunner
 
 import hexpipe
 from hexpipe.cli import app
-from hexpipe.config import load_params
+from hexpipe.config import apply_overrides, load_params
 from hexpipe.envs.hexapod import HexapodEnv
 from hexpipe.models.vae import ConvVAE, EncoderError, encoder_config, export_encoder, load_encoder
 from hexpipe.models.weights import WeightsError, load_state_dict
@@ -119,6 +119,22 @@ def test_a_policy_recorded_before_lift_follows_runs_without_it(seeing, tmp_path)
     assert load_policy(policy_dir).params.cpg.lift_follows is False
     now = load_params(ROOT / "params.yaml")
     assert "cpg.lift_follows: False -> True" in load_policy(policy_dir, now).drift
+
+
+def test_a_policy_sees_only_the_map_reference_it_was_trained_with(seeing, tmp_path):
+    """policy.json files written before `sensors.heightmap_reference` existed lack it: those policies saw the map
+    from the stance plane, so they run under "stance" and are refused under "ground", in one line."""
+    policy_dir = copy_policy(seeing, tmp_path / "ppo")
+    config = json.loads((policy_dir / "policy.json").read_text())
+    assert config["sensors"]["heightmap_reference"] == "stance"
+    del config["sensors"]["heightmap_reference"]
+    (policy_dir / "policy.json").write_text(json.dumps(config))
+    assert load_policy(policy_dir).params.sensors.heightmap_reference == "stance"
+    now = load_params(ROOT / "params.yaml")
+    assert load_policy(policy_dir, now).params.sensors.heightmap_reference == "stance"
+    ground = apply_overrides(now, ["sensors.heightmap_reference=ground"])
+    with pytest.raises(PolicyError, match=r"trained with sensors\.heightmap_reference=stance, params now have ground"):
+        load_policy(policy_dir, ground)
 
 
 def test_evaluate_and_play_never_unpickle_the_sb3_files(seeing, tmp_path):

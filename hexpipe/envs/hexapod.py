@@ -37,7 +37,7 @@ from hexpipe.config import CpgConfig, Params, SensorConfig, SimConfig, TaskConfi
 from hexpipe.envs.privileged import PRIVILEGED, corridor_columns, privileged_space, privileged_vector
 from hexpipe.envs.rewards import failure_penalty, forward_velocity_reward, power_penalty
 from hexpipe.envs.state import WORLD_FRAME, EnvScene, EnvState
-from hexpipe.sensors.heightmap import HEADING_FRAME, quat_to_yaw
+from hexpipe.sensors.heightmap import HEADING_FRAME, quat_to_yaw, reference_height
 from hexpipe.sim.cpg import CPG
 from hexpipe.sim.gait import GaitMap, slew_path
 from hexpipe.sim.lift_trail import LiftTrail, foot_lags
@@ -336,7 +336,8 @@ class HexapodEnv(gym.Env):
         base_pos, base_quat = poses[0]
         names = ["base_link", *self.robot_spec.link_names]
         transforms = [(WORLD_FRAME, name, pos, quat) for name, (pos, quat) in zip(names, poses, strict=True)]
-        plane = np.array([base_pos[0], base_pos[1], base_pos[2] - self.sim_cfg.body_height])
+        reference = self.sensor_cfg.heightmap_reference  # the height map's frame: its cells sit on the terrain
+        plane = np.array([*base_pos[:2], reference_height(self.terrain, base_pos, self.sim_cfg.body_height, reference)])
         transforms.append((WORLD_FRAME, HEADING_FRAME, plane, _yaw_quaternion(quat_to_yaw(base_quat))))
         for sensor in registry.SENSORS.values():
             transforms.extend(sensor.frames(self.sensor_cfg))

@@ -191,8 +191,9 @@ def _load_matching_encoder(directory: Path, config: dict[str, Any], params: Para
     from hexpipe.models.vae import EncoderError, load_encoder
 
     modality, encoder_dir = config["modality"], config["encoder_dir"]
+    before = SensorConfig().model_dump(mode="json")  # a key policy.json lacks predates it: trained at its default
     for key in registry.get(modality).config_keys:  # settings that change what its frames mean
-        trained, now = config["sensors"].get(key), params.sensors.model_dump(mode="json")[key]
+        trained, now = config["sensors"].get(key, before[key]), params.sensors.model_dump(mode="json")[key]
         if trained != now:
             raise PolicyError(
                 f"{directory}: policy was trained with sensors.{key}={trained}, params now have {now} "

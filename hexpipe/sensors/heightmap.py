@@ -1,8 +1,10 @@
 """The height map: terrain heights on a body-centred grid ahead of the robot, relative to the stance plane.
 
 It samples the terrain's own geometry (`Terrain.height_at`), which is exact for boxes and heightfields and orders of
-magnitude cheaper than casting a ray per cell. Values are terrain heights relative to the robot's nominal stance
-plane (base height minus `body_height`): flat ground reads about 0, a 0.10 m block +0.10.
+magnitude cheaper than casting a ray per cell. Values are terrain heights relative to a reference height
+(`sensors.heightmap_reference`): the robot's nominal stance plane (base height minus `body_height`, the default), or
+the terrain under the base. Either way flat ground reads about 0 and a 0.10 m block ahead +0.10; they differ when
+the legs hold the body above or below its nominal height (the stance plane then moves every cell by as much).
 """
 
 from __future__ import annotations
@@ -33,10 +35,19 @@ def quat_to_yaw(q: np.ndarray) -> float:
     return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
 
 
+def reference_height(terrain: HeightSource, base_pos: np.ndarray, body_height: float, reference: str) -> float:
+    """The height (m, world) the map's cells are measured from: the stance plane (base z - body_height) or the
+    terrain under the base (reference "ground")."""
+    if reference == "ground":
+        return float(terrain.height_at(np.asarray(base_pos[:1]), np.asarray(base_pos[1:2]))[0])
+    return float(base_pos[2] - body_height)
+
+
 class HeightMapSensor:
     """A rows x cols grid in the heading frame (yaw only), rows running forward, columns right-to-left."""
 
     def __init__(self, cfg: SensorConfig):
+        self.reference = cfg.heightmap_reference
         near, far = cfg.heightmap_ahead
         half = cfg.heightmap_width / 2
         self.cell_x = (far - near) / cfg.heightmap_rows
@@ -58,7 +69,7 @@ class HeightMapSensor:
         return (terrain.height_at(wx, wy) - plane_z).reshape(self.shape).astype(np.float32)
 
     def __call__(self, view: SimView) -> np.ndarray:
-        plane = view.base_pos[2] - view.body_height
+        plane = reference_height(view.terrain, view.base_pos, view.body_height, self.reference)
         grid = self.read(view.terrain, view.base_pos[:2], quat_to_yaw(view.base_quat), plane)
         return np.clip(grid, -LIMIT_M, LIMIT_M)
 
@@ -69,7 +80,7 @@ class HeightMap(Sensor):
     kind = "grid"
     image = ImagePrep(channels=1, low=VAE_RANGE_M[0], high=VAE_RANGE_M[1], units="m", channels_last=False,
                       nonfinite_to_low=True)
-    config_keys = ("heightmap_rows", "heightmap_cols", "heightmap_ahead", "heightmap_width")
+    config_keys = ("heightmap_rows", "heightmap_cols", "heightmap_ahead", "heightmap_width", "heightmap_reference")
 
     def frame_shape(self, cfg: SensorConfig) -> tuple[int, ...]:
         return (cfg.heightmap_rows, cfg.heightmap_cols)
