@@ -8,38 +8,17 @@ seeds (1000, 1001, ...) and prints, per episode, how it ended and b in each bin 
 
 from __future__ import annotations
 
-import sys
-
 import numpy as np
-
-import hexpipe
-from hexpipe.envs.hexapod import HexapodEnv
-
-BIN = 0.2  # m of base distance per column
+from course import BIN, bins, episodes, main
 
 
-def profile(policy_dir: str, terrain: str, episodes: int) -> None:
-    policy = hexpipe.load_policy(policy_dir)
-    env = HexapodEnv.from_params(policy.params, terrain, obs_sensors=policy.sensors)
-    edges = np.arange(0.0, 3.0, BIN)
-    print("episode end  distance  " + " ".join(f"{lo:4.1f}" for lo in edges))
-    for episode in range(episodes):
-        obs, info = env.reset(seed=1000 + episode)
-        distance, lift, done = [], [], False
-        while not done:
-            obs, _, terminated, truncated, info = env.step(policy.predict(obs))
-            done = terminated or truncated
-            distance.append(info["distance"])
-            lift.append(float(obs["cpg"][1]))
-        x, b = np.array(distance), np.array(lift)
-        cells = [b[(x >= lo) & (x < lo + BIN)] for lo in edges]
-        row = " ".join(f"{c.mean():.2f}" if c.size else "  - " for c in cells)
-        print(f"{episode:7d} {info['termination']:5s} {x[-1]:8.2f}  {row}")
-    env.close()
+def profile(policy_dir: str, terrain: str, count: int) -> None:
+    print("episode end  distance  " + " ".join(f"{lo:4.1f}" for lo in np.arange(0.0, 3.0, BIN)))
+    runs = episodes(policy_dir, terrain, count, lambda env, obs, info: (float(obs["cpg"][1]),))
+    for episode, (end, rows) in enumerate(runs):
+        row = " ".join(f"{cell[:, 1].mean():.2f}" if len(cell) else "  - " for _, cell in bins(rows))
+        print(f"{episode:7d} {end:5s} {rows[-1, 0]:8.2f}  {row}")
 
 
 if __name__ == "__main__":
-    if len(sys.argv) < 2:
-        raise SystemExit(__doc__)
-    profile(sys.argv[1], sys.argv[2] if len(sys.argv) > 2 else "extra_blocks",
-            int(sys.argv[3]) if len(sys.argv) > 3 else 3)
+    main(profile, __doc__)
