@@ -1,10 +1,11 @@
-"""The height map: terrain heights on a body-centred grid ahead of the robot, relative to the stance plane.
+"""The height map: terrain heights on a body-centred grid ahead of the robot, relative to a reference height.
 
 It samples the terrain's own geometry (`Terrain.height_at`), which is exact for boxes and heightfields and orders of
 magnitude cheaper than casting a ray per cell. Values are terrain heights relative to a reference height
 (`sensors.heightmap_reference`): the robot's nominal stance plane (base height minus `body_height`, the default), or
-the terrain under the base. Either way flat ground reads about 0 and a 0.10 m block ahead +0.10; they differ when
-the legs hold the body above or below its nominal height (the stance plane then moves every cell by as much).
+the terrain under the base. Standing on flat ground, both read it about 0 and a 0.10 m block ahead +0.10. They
+differ when the legs hold the body above or below its nominal height (the stance plane then moves every cell by as
+much) and when the base is over a block (from the ground under it, the block reads 0 and the ground around -0.10).
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ from hexpipe.sensors.base import ImagePrep, Message, Sensor, SimView
 if TYPE_CHECKING:
     from hexpipe.config import SensorConfig
 
-HEADING_FRAME = "heading"  # base position on the stance plane, yaw only (the env logs it to /tf)
+HEADING_FRAME = "heading"  # base position at the map's reference height, yaw only (the env logs it to /tf)
 LIMIT_M = 5.0  # observation bound (m)
 # Heights are in metres relative to the stance plane. This window covers a dip of 15 cm and a raised block of up to
 # 25 cm (the tallest the hexapod is asked to climb is well below that); flat ground maps to 0.375.
