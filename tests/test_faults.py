@@ -60,8 +60,8 @@ def near(default: Any) -> st.SearchStrategy[Any]:
     """Values of the default's own type and scale: mostly valid, so that valid configs get run too."""
     if isinstance(default, bool):
         return st.booleans()
-    if isinstance(default, int):
-        return st.integers(max(0, default // 4), default * 2 + 1)
+    if isinstance(default, int):  # a negative default is a sentinel (ppo.sde_sample_freq=-1): around it, up to 1
+        return st.integers(min(default, max(0, default // 4)), max(default * 2 + 1, 1))
     if isinstance(default, float):
         return st.floats(*sorted((0.5 * default, 1.5 * default))) if default else st.floats(0, 0.2)
     if isinstance(default, tuple | list) and default and not isinstance(default[0], str):
