@@ -207,6 +207,9 @@ class TaskConfig(_Section):
     # minus this much reward per W of joint power, so lifting has a price (issue 10); 0 = the paper's reward.
     # 0.2 with the failure penalty: the price sweep's choice (reports/sweeps/penalty, reports/sweeps/price)
     power_cost: Annotated[float, Field(ge=0)] = 0.2
+    # minus this much reward per rad of the lift b above cpg.lower's b, each control step: a price on the lift
+    # itself, which joint power barely charges on this robot (reports/experiments/README.md, "select"); 0 = off
+    lift_cost: Annotated[float, Field(ge=0)] = 0.0
     # minus this much reward once when an episode ends stuck or fallen: with a high power price, giving up at the
     # block face otherwise pays better than a slow, costly climb (reports/experiments/README.md, "price"); 0 = off
     failure_penalty: Annotated[float, Field(ge=0)] = 1000.0

@@ -239,6 +239,20 @@ def test_reward_is_the_papers_unless_power_costs_something():
     assert rewards[0.1][0] < rewards[0.1][1]
 
 
+def test_the_lift_price_charges_b_above_its_floor_and_nothing_at_the_floor():
+    """task.lift_cost prices the commanded lift, per rad above cpg.lower's b, each step; the floor walks free."""
+    charged = {}
+    for gait in (HIGH_GAIT, (0.25, 0.2, 1.5 * math.pi)):
+        env = HexapodEnv("flat", cpg=holding(gait), initial_cpg=gait, task=TaskConfig(sensors=(), lift_cost=10.0))
+        env.reset(seed=0)
+        for _ in range(5):
+            _, reward, _, _, info = env.step(np.zeros(3))
+        assert reward == pytest.approx(sum(info["reward_terms"].values()))
+        charged[gait[1]] = info["reward_terms"]["lift"]
+        env.close()
+    assert charged[0.40] == pytest.approx(-10.0 * (0.40 - 0.2)) and charged[0.2] == 0.0
+
+
 def test_giving_up_costs_the_failure_penalty_once_and_reaching_the_goal_costs_nothing():
     ends = {}
     for terrain, gait in (("single_block", LOW_GAIT), ("flat", None)):  # the low gait sticks at the block face

@@ -2,7 +2,7 @@
 
 import pytest
 
-from hexpipe.envs.rewards import GRAVITY, cost_of_transport, forward_velocity_reward, power_penalty
+from hexpipe.envs.rewards import GRAVITY, cost_of_transport, forward_velocity_reward, lift_penalty, power_penalty
 
 
 def test_forward_velocity_reward_is_scaled_velocity():
@@ -27,3 +27,9 @@ def test_failure_penalty_applies_to_giving_up_only():
     ends = ("stuck", "fall", "goal", None, "nonfinite")
     assert [failure_penalty(t, 300.0) for t in ends] == [-300.0, -300.0, 0, 0, 0]
     assert failure_penalty("stuck", 0.0) == 0.0  # 0: no penalty, the paper's reward
+
+
+def test_lift_penalty_is_linear_above_the_floor_and_free_at_or_below_it():
+    assert lift_penalty(0.45, 0.2, 4.0) == pytest.approx(-1.0)
+    assert lift_penalty(0.2, 0.2, 4.0) == 0.0 and lift_penalty(0.1, 0.2, 4.0) == 0.0
+    assert lift_penalty(0.45, 0.2, 0.0) == 0.0

@@ -13,8 +13,8 @@ Observation (Dict):
 Action: Box [-1, 1]^3, scaled by `CpgConfig.accel_limit` to d^2/dt^2 (a, b, omega), or with `action_order: 1` by
 `CpgConfig.rate_limit` to d/dt (a, b, omega).
 Reward: `reward_scale` * forward velocity (m/s, displacement over the control step), as in the paper, minus
-`power_cost` * mean mechanical joint power (W) when that is set (0 is the paper's reward), minus `failure_penalty`
-once when the episode ends stuck or fallen.
+`power_cost` * mean mechanical joint power (W) when that is set (0 is the paper's reward), minus `lift_cost` * the lift
+b above its floor (rad) when that is set, minus `failure_penalty` once when the episode ends stuck or fallen.
 Terminates on `goal` (3 m forward), `stuck` (too little progress over a window), `fall` (tilt or base too low)
 or `nonfinite` physics; truncates at the time limit. `info` carries distance, success, termination and the
 reward terms.
@@ -35,7 +35,7 @@ from gymnasium import spaces
 from hexpipe import sensors as registry
 from hexpipe.config import CpgConfig, Params, SensorConfig, SimConfig, TaskConfig
 from hexpipe.envs.privileged import PRIVILEGED, corridor_columns, privileged_space, privileged_vector
-from hexpipe.envs.rewards import failure_penalty, forward_velocity_reward, power_penalty
+from hexpipe.envs.rewards import failure_penalty, forward_velocity_reward, lift_penalty, power_penalty
 from hexpipe.envs.state import WORLD_FRAME, EnvScene, EnvState
 from hexpipe.sensors.heightmap import HEADING_FRAME, quat_to_yaw, reference_height
 from hexpipe.sim.cpg import CPG
@@ -250,6 +250,7 @@ class HexapodEnv(gym.Env):
         return {
             "forward": forward_velocity_reward(dx, self.control_dt, self.task.reward_scale),
             "power": power_penalty(power, self.task.power_cost),
+            "lift": lift_penalty(float(self.cpg.params[1]), self.cpg_cfg.lower[1], self.task.lift_cost),
             "failure": failure_penalty(termination, self.task.failure_penalty),
         }
 
