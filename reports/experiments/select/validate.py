@@ -1,0 +1,64 @@
+"""Score trained policies on a validation set drawn from their training distribution (`varied`), not the suite.
+
+    .venv/bin/python reports/experiments/select/validate.py OUT.csv TRIAL_DIR [TRIAL_DIR ...] [--episodes 40]
+
+Each TRIAL_DIR is a sweep trial's data folder (data/sweeps/NAME/COND-seedN, holding ppo/). Every policy runs the
+same `--episodes` episodes of `varied` at full difficulty, seeds 5000.. (evaluate uses 1000..; training draws its
+own), deterministic, with params.yaml as the sweep trials ran it (the default conditions: nothing to override).
+Writes one row per episode: trial, seed, success, distance, energy (J), termination, time, and the episode's
+return under the default training reward (reward_scale x control_hz per m, -power_cost x control_hz per J,
+-failure_penalty on a stuck or fallen end; params.yaml's task.lift_cost is 0, so no lift term).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+import pandas as pd
+
+from hexpipe.config import load_params
+from hexpipe.envs.rewards import FAILURES
+from hexpipe.evaluation.controllers import ControllerSpec
+from hexpipe.evaluation.episodes import EpisodeJob, run_episode
+from hexpipe.evaluation.suite import load_scenarios
+
+SEED0 = 5000
+
+
+def _one(args: tuple[str, int]) -> dict:
+    trial, seed = args
+    params = load_params("params.yaml")
+    scenario = load_scenarios(["varied"])[0]
+    job = EpisodeJob(scenario, ControllerSpec("policy", str(Path(trial) / "ppo")), seed - SEED0, seed)
+    row = run_episode(params, job).row
+    task = params.task
+    failed = row["termination"] in FAILURES
+    ret = (task.reward_scale / (1.0 / params.sim.control_hz) * row["distance"]
+           - task.power_cost * params.sim.control_hz * row["energy_j"] - task.failure_penalty * failed)
+    return {"trial": trial, "seed": seed, "success": row["success"], "termination": row["termination"],
+            "distance": row["distance"], "time": row["time"], "energy_j": row["energy_j"],
+            "b_mean": row["b_mean"], "return": ret}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("out")
+    ap.add_argument("trials", nargs="+")
+    ap.add_argument("--episodes", type=int, default=40)
+    ap.add_argument("--workers", type=int, default=2)
+    a = ap.parse_args()
+    jobs = [(t, SEED0 + i) for t in a.trials for i in range(a.episodes)]
+    with ProcessPoolExecutor(a.workers) as pool:
+        rows = list(pool.map(_one, jobs, chunksize=4))
+    out = Path(a.out)
+    tmp = out.with_suffix(".tmp")
+    pd.DataFrame(rows).to_csv(tmp, index=False)
+    tmp.replace(out)
+    print(f"wrote {len(rows)} episodes to {out}", file=sys.stderr)
+
+
+if __name__ == "__main__":
+    main()
