@@ -316,6 +316,9 @@ class PpoConfig(_Section):
     # its height, "a rise in range"; rise_head.pt beside the encoder, vae.feature_weight > 0): the same information,
     # laid on the same axes whichever encoder the VAE's seed drew (issue 10: the encoder's draw moved adaptation)
     rise_readout: bool = False
+    # [start, end] fractions of total_timesteps over which task.lift_cost rises from 0 to its value (null: the
+    # whole price from the first step): learn to cross with the lift free, then be charged for it where not needed
+    lift_cost_ramp: tuple[Fraction, Fraction] | None = None
     checkpoint_every: PositiveInt = 20_000
     encoder_dir: str = "data/models/vae"
     out_dir: str = "data/models/ppo"
@@ -332,6 +335,8 @@ class PpoConfig(_Section):
             )
         if self.blind and self.rise_readout:
             raise ValueError("rise_readout reads the terrain encoder, which a blind policy (blind: true) has not")
+        if self.lift_cost_ramp is not None and not self.lift_cost_ramp[0] < self.lift_cost_ramp[1]:
+            raise ValueError(f"lift_cost_ramp: expected [start, end] with start < end, got {list(self.lift_cost_ramp)}")
         if self.use_sde and self.privileged_critic:
             raise ValueError("use_sde with privileged_critic is not supported: gSDE's noise reads the actor's "
                              "features, which the asymmetric policy splits from the critic's; set one of them to false")

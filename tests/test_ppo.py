@@ -222,3 +222,46 @@ def test_a_policy_runs_only_under_the_action_order_it_was_trained_with(tmp_path)
                                           r"omega\), params now have 2") as err:
         load_policy(tmp_path / "ppo", tiny(tmp_path, *blind))
     assert "\n" not in str(err.value)
+
+
+def test_the_lift_price_ramps_in_through_every_training_env():
+    """ppo.lift_cost_ramp: the callback reaches HexapodEnv through the training stack (worker processes and the
+    curriculum wrapper) and sets the share of task.lift_cost that the next steps charge."""
+    from types import SimpleNamespace
+
+    from hexpipe.rl.callbacks import LiftCostRamp
+    from hexpipe.rl.train import make_vec_env
+
+    params = load_params(ROOT / "params.yaml", ["task.lift_cost=10", "cpg.initial=[0.25,0.4,4.712389]",
+                                                 "ppo.lift_cost_ramp=[0.25,0.75]", "ppo.total_timesteps=400"])
+    venv = make_vec_env(params, ("flat",), 2, None, False, 0)
+    try:
+        venv.reset()
+        model = SimpleNamespace(num_timesteps=0, get_env=lambda: venv, logger=None)
+        ramp = LiftCostRamp(100, 300)
+        ramp.init_callback(model)
+        charged = []
+        for steps in (0, 100, 200, 300, 400):
+            model.num_timesteps = steps
+            ramp.on_rollout_start()
+            _, _, _, infos = venv.step(np.zeros((2, 3), dtype=np.float32))
+            charged.append([info["reward_terms"]["lift"] for info in infos])
+    finally:
+        venv.close()
+    # b holds 0.4, 0.2 above its floor: the whole price is -10 * 0.2 = -2 per step
+    assert np.allclose(charged, [[0.0, 0.0], [0.0, 0.0], [-1.0, -1.0], [-2.0, -2.0], [-2.0, -2.0]])
+
+
+def test_a_lift_price_ramp_must_rise():
+    with pytest.raises(ValueError, match="lift_cost_ramp"):
+        load_params(ROOT / "params.yaml", ["ppo.lift_cost_ramp=[0.8,0.2]"])
+
+
+def test_training_under_a_lift_price_ramp_charges_nothing_before_it_starts(tmp_path):
+    params = tiny(tmp_path, "ppo.blind=true", "ppo.n_envs=1", "task.lift_cost=10", "ppo.lift_cost_ramp=[0.5,0.75]",
+                  "ppo.train_terrains=[flat]")
+    train_ppo(params, show_progress=False)
+    episodes = [json.loads(line) for line in (tmp_path / "reports" / "episodes.jsonl").read_text().splitlines()]
+    before = [e["reward_terms"]["lift"] for e in episodes if e["timesteps"] <= 128]
+    after = [e["reward_terms"]["lift"] for e in episodes if e["timesteps"] > 192]
+    assert before and after and all(v == 0.0 for v in before) and min(after) < 0.0

@@ -33,3 +33,9 @@ def test_lift_penalty_is_linear_above_the_floor_and_free_at_or_below_it():
     assert lift_penalty(0.45, 0.2, 4.0) == pytest.approx(-1.0)
     assert lift_penalty(0.2, 0.2, 4.0) == 0.0 and lift_penalty(0.1, 0.2, 4.0) == 0.0
     assert lift_penalty(0.45, 0.2, 0.0) == 0.0
+
+
+def test_a_ramp_is_nothing_before_its_start_linear_between_and_whole_after_its_end():
+    from hexpipe.envs.rewards import ramp
+
+    assert [ramp(s, 100, 300) for s in (0, 100, 150, 300, 1000)] == [0.0, 0.0, 0.25, 1.0, 1.0]

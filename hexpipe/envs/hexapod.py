@@ -124,6 +124,7 @@ class HexapodEnv(gym.Env):
         self.trail = (LiftTrail(foot_lags(self.robot_spec, self.sim_cfg.stance_reach), self.max_steps + 1)
                       if self.cpg_cfg.lift_follows else None)
         self._readers: dict[str, Callable[[registry.SimView], np.ndarray]] = {}  # made on first use
+        self.lift_cost_share = 1.0  # of task.lift_cost charged now: train-ppo's ppo.lift_cost_ramp lowers it
 
         self.action_space = spaces.Box(-1.0, 1.0, shape=(3,), dtype=np.float32)
         self.observation_space = observation_space(self.cpg_cfg, self.sensor_cfg, self.task, privileged)
@@ -250,7 +251,8 @@ class HexapodEnv(gym.Env):
         return {
             "forward": forward_velocity_reward(dx, self.control_dt, self.task.reward_scale),
             "power": power_penalty(power, self.task.power_cost),
-            "lift": lift_penalty(float(self.cpg.params[1]), self.cpg_cfg.lower[1], self.task.lift_cost),
+            "lift": lift_penalty(float(self.cpg.params[1]), self.cpg_cfg.lower[1],
+                                 self.task.lift_cost * self.lift_cost_share),
             "failure": failure_penalty(termination, self.task.failure_penalty),
         }
 
@@ -381,6 +383,10 @@ class HexapodEnv(gym.Env):
             physicsClientId=self.client,
         )
         return np.asarray(rgba, dtype=np.uint8).reshape(240, 320, 4)[:, :, :3]
+
+    def set_lift_cost_share(self, share: float) -> None:
+        """Charge `share` (in [0, 1]) of task.lift_cost from the next step: train-ppo ramps the price in with it."""
+        self.lift_cost_share = float(share)
 
     def close(self) -> None:
         if getattr(self, "client", None) is not None:

@@ -30,6 +30,11 @@ def lift_penalty(b_rad: float, floor_rad: float, cost: float) -> float:
     return -cost * max(0.0, b_rad - floor_rad)
 
 
+def ramp(step: int, start: int, end: int) -> float:
+    """The share of a price in force at training `step`: 0 before `start`, rising linearly to 1 at `end`."""
+    return min(1.0, max(0.0, (step - start) / (end - start)))
+
+
 FAILURES = ("stuck", "fall")  # terminations that are the gait's fault; the goal and the time limit are not
 
 

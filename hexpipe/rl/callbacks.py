@@ -1,4 +1,4 @@
-"""Small SB3 callbacks: episode statistics to dvclive, atomic checkpoints, and a rich progress bar."""
+"""Small SB3 callbacks: episode statistics to dvclive, atomic checkpoints, a price ramp and a rich progress bar."""
 
 from __future__ import annotations
 
@@ -11,7 +11,28 @@ import numpy as np
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 from stable_baselines3.common.callbacks import BaseCallback
 
+from hexpipe.envs.rewards import ramp
 from hexpipe.rl.checkpoint import save_checkpoint
+
+
+class LiftCostRamp(BaseCallback):
+    """Before each rollout, tells every env what share of task.lift_cost to charge (ppo.lift_cost_ramp): 0 until
+    `start` timesteps, rising linearly to the whole price at `end`. Read from the model's step count, so a resumed
+    run picks the ramp up where its checkpoint left it."""
+
+    def __init__(self, start: int, end: int):
+        super().__init__()
+        self.start, self.end = start, end
+        self.share: float | None = None
+
+    def _on_rollout_start(self) -> None:
+        share = ramp(self.model.num_timesteps, self.start, self.end)  # num_timesteps lags until the first step
+        if share != self.share:
+            self.training_env.env_method("set_lift_cost_share", share)
+            self.share = share
+
+    def _on_step(self) -> bool:
+        return True
 
 
 class EpisodeStats(BaseCallback):
@@ -19,7 +40,8 @@ class EpisodeStats(BaseCallback):
 
     Logged against timesteps to dvclive (`episode/*`, `train/*` losses, `time/steps_per_s`): the paper's figure 6
     (episode reward against time) as a DVC plot, plus success rate and distance, and one curve per reward term
-    (`episode/reward_<term>`, the env's `info["reward_terms"]` summed over the episode: forward, power, failure).
+    (`episode/reward_<term>`, the env's `info["reward_terms"]` summed over the episode: forward, power, lift,
+    failure).
     """
 
     def __init__(self, live: Any | None = None, window: int = 20, log_path: Path | None = None,

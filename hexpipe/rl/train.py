@@ -225,7 +225,7 @@ def train_ppo(params: Params, resume: bool = False, show_progress: bool = True) 
     import torch
     from dvclive import Live
 
-    from hexpipe.rl.callbacks import Checkpoints, EpisodeStats, RichProgress
+    from hexpipe.rl.callbacks import Checkpoints, EpisodeStats, LiftCostRamp, RichProgress
 
     cfg = params.ppo
     torch.set_num_threads(1)
@@ -267,6 +267,9 @@ def train_ppo(params: Params, resume: bool = False, show_progress: bool = True) 
     resume_at = model.num_timesteps if start_from is not None else None
     stats = EpisodeStats(live, log_path=report_dir / "episodes.jsonl", resume_at=resume_at)
     callbacks = [stats, Checkpoints(checkpoints, cfg.checkpoint_every)]
+    if cfg.lift_cost_ramp is not None:
+        start, end = (round(f * cfg.total_timesteps) for f in cfg.lift_cost_ramp)
+        callbacks.insert(0, LiftCostRamp(start, end))  # first: the share is set before the rollout's first step
     if cfg.curriculum:
         callbacks.append(CurriculumStats(live))  # after stats, which sets live.step for this rollout
     if show_progress:
