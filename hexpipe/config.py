@@ -210,6 +210,9 @@ class TaskConfig(_Section):
     # minus this much reward per rad of the lift b above cpg.lower's b, each control step: a price on the lift
     # itself, which joint power barely charges on this robot (reports/experiments/README.md, "select"); 0 = off
     lift_cost: Annotated[float, Field(ge=0)] = 0.0
+    # [behind, ahead] (m): the lift price is waived while the terrain from `behind` m behind the body to `ahead` m
+    # ahead of it rises or falls by more than 3 cm, so lifting costs only on level ground (null: charged everywhere)
+    lift_free_zone: tuple[Annotated[float, Field(ge=0)], Annotated[float, Field(ge=0)]] | None = None
     # minus this much reward once when an episode ends stuck or fallen: with a high power price, giving up at the
     # block face otherwise pays better than a slow, costly climb (reports/experiments/README.md, "price"); 0 = off
     failure_penalty: Annotated[float, Field(ge=0)] = 1000.0

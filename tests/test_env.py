@@ -253,6 +253,29 @@ def test_the_lift_price_charges_b_above_its_floor_and_nothing_at_the_floor():
     assert charged[0.40] == pytest.approx(-10.0 * (0.40 - 0.2)) and charged[0.2] == 0.0
 
 
+def test_a_lift_free_zone_waives_the_lift_price_near_the_block_and_charges_it_on_level_ground():
+    """task.lift_free_zone: the high gait pays for its lift until the block's face is 0.5 m ahead, then walks free
+    until its back edge is 0.4 m behind."""
+    task = TaskConfig(sensors=(), lift_cost=10.0, lift_free_zone=(0.4, 0.5))
+    env = HexapodEnv("single_block", cpg=holding(HIGH_GAIT), initial_cpg=HIGH_GAIT, task=task)
+    env.reset(seed=0)
+    lift_by_x = []
+    for _ in range(2000):
+        _, reward, terminated, truncated, info = env.step(np.zeros(3))
+        assert reward == pytest.approx(sum(info["reward_terms"].values()))
+        lift_by_x.append((float(env.robot.base_state()[0][0]), info["reward_terms"]["lift"]))
+        if terminated or truncated or lift_by_x[-1][0] > 2.0:
+            break
+    env.close()
+    charged = -10.0 * (HIGH_GAIT[1] - 0.2)
+    assert lift_by_x[-1][0] > 2.0  # the high gait crossed
+    before, near, after = ([lift for x, lift in lift_by_x if lo < x < hi] for lo, hi in ((0, 0.45), (0.55, 1.65),
+                                                                                          (1.75, 9)))
+    assert before and near and after
+    assert before == pytest.approx([charged] * len(before)) and after == pytest.approx([charged] * len(after))
+    assert near == [0.0] * len(near)
+
+
 def test_giving_up_costs_the_failure_penalty_once_and_reaching_the_goal_costs_nothing():
     ends = {}
     for terrain, gait in (("single_block", LOW_GAIT), ("flat", None)):  # the low gait sticks at the block face

@@ -2,7 +2,15 @@
 
 import pytest
 
-from hexpipe.envs.rewards import GRAVITY, cost_of_transport, forward_velocity_reward, lift_penalty, power_penalty
+from hexpipe.envs.rewards import (
+    GRAVITY,
+    RELIEF_M,
+    cost_of_transport,
+    forward_velocity_reward,
+    lift_penalty,
+    lift_waived,
+    power_penalty,
+)
 
 
 def test_forward_velocity_reward_is_scaled_velocity():
@@ -33,6 +41,12 @@ def test_lift_penalty_is_linear_above_the_floor_and_free_at_or_below_it():
     assert lift_penalty(0.45, 0.2, 4.0) == pytest.approx(-1.0)
     assert lift_penalty(0.2, 0.2, 4.0) == 0.0 and lift_penalty(0.1, 0.2, 4.0) == 0.0
     assert lift_penalty(0.45, 0.2, 0.0) == 0.0
+
+
+def test_the_lift_is_waived_only_where_the_terrain_rises_or_falls_more_than_a_few_cm():
+    assert RELIEF_M == 0.03
+    assert lift_waived(0.10) and lift_waived(0.031)
+    assert not lift_waived(0.0) and not lift_waived(0.03)
 
 
 def test_a_ramp_is_nothing_before_its_start_linear_between_and_whole_after_its_end():

@@ -146,3 +146,18 @@ def test_rise_ahead_labels_distance_and_height_on_known_terrains() -> None:
     assert two.rise_ahead(0.0, 0.0, 0.0, max_range=1.4) == pytest.approx((0.8, 0.05), abs=2e-3)  # the first rise
     assert two.rise_ahead(1.2, 0.0, 0.0, max_range=1.4) == pytest.approx((0.3, 0.12), abs=2e-3)
 
+
+def test_relief_is_the_rise_and_fall_within_the_strip_around_the_body() -> None:
+    """What waives the lift price (task.lift_free_zone): a block's height while the strip holds one of its edges."""
+    single = _fixed("single_block")  # 0.10 m high, 0.30 m deep, face at 1.0 m
+    zone = (0.4, 0.5)  # m behind, m ahead
+    assert single.relief(0.0, 0.0, 0.0, *zone) == 0.0  # level ground; the face is 1.0 m ahead
+    assert single.relief(0.6, 0.0, 0.0, *zone) == pytest.approx(0.1)  # the face within 0.5 m ahead
+    assert single.relief(1.6, 0.0, 0.0, *zone) == pytest.approx(0.1)  # the back edge within 0.4 m behind
+    assert single.relief(1.8, 0.0, 0.0, *zone) == 0.0  # past it
+    assert single.relief(0.55, 0.0, math.pi, *zone) == 0.0  # facing back, the face is behind and beyond 0.4 m
+    assert single.relief(0.55, 0.0, math.pi, 0.5, 0.5) == pytest.approx(0.1)
+    wide = _fixed("wide_block")  # 1.0 m deep: its top is level
+    assert wide.relief(1.5, 0.0, 0.0, *zone) == 0.0
+    assert _fixed("rough").relief(1.5, 0.0, 0.0, *zone) > 0.03  # rough ground is uneven everywhere
+

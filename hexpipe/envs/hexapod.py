@@ -14,7 +14,8 @@ Action: Box [-1, 1]^3, scaled by `CpgConfig.accel_limit` to d^2/dt^2 (a, b, omeg
 `CpgConfig.rate_limit` to d/dt (a, b, omega).
 Reward: `reward_scale` * forward velocity (m/s, displacement over the control step), as in the paper, minus
 `power_cost` * mean mechanical joint power (W) when that is set (0 is the paper's reward), minus `lift_cost` * the lift
-b above its floor (rad) when that is set, minus `failure_penalty` once when the episode ends stuck or fallen.
+b above its floor (rad) when that is set (waived near uneven terrain with `lift_free_zone`), minus `failure_penalty`
+once when the episode ends stuck or fallen.
 Terminates on `goal` (3 m forward), `stuck` (too little progress over a window), `fall` (tilt or base too low)
 or `nonfinite` physics; truncates at the time limit. `info` carries distance, success, termination and the
 reward terms.
@@ -35,7 +36,7 @@ from gymnasium import spaces
 from hexpipe import sensors as registry
 from hexpipe.config import CpgConfig, Params, SensorConfig, SimConfig, TaskConfig
 from hexpipe.envs.privileged import PRIVILEGED, corridor_columns, privileged_space, privileged_vector
-from hexpipe.envs.rewards import failure_penalty, forward_velocity_reward, lift_penalty, power_penalty
+from hexpipe.envs.rewards import failure_penalty, forward_velocity_reward, lift_penalty, lift_waived, power_penalty
 from hexpipe.envs.state import WORLD_FRAME, EnvScene, EnvState
 from hexpipe.sensors.heightmap import HEADING_FRAME, quat_to_yaw, reference_height
 from hexpipe.sim.cpg import CPG
@@ -238,23 +239,33 @@ class HexapodEnv(gym.Env):
         if not math.isfinite(power):
             power = 0.0
         self.energy += power * self.control_dt
-        terms = self._reward_terms(dx, power, termination)
+        terms = self._reward_terms(dx, power, termination, self._lift_free(pos, quat))
         reward = sum(terms.values())
         truncated = termination is None and self.steps >= self.max_steps
         obs = self._observation() if termination != "nonfinite" else self._zero_observation()
         self.last_info = self._info(pos, terms, termination, power)
         return obs, reward, termination is not None, truncated, self.last_info
 
-    def _reward_terms(self, dx: float, power: float, termination: str | None = None) -> dict[str, float]:
-        """The named reward terms of one control step: dx (m forward), power (W, mean mechanical joint power), and
-        how the step ended the episode, if it did."""
+    def _reward_terms(
+        self, dx: float, power: float, termination: str | None = None, lift_free: bool = False
+    ) -> dict[str, float]:
+        """The named reward terms of one control step: dx (m forward), power (W, mean mechanical joint power), how
+        the step ended the episode, if it did, and whether the terrain around the body waives the lift price."""
+        lift_cost = 0.0 if lift_free else self.task.lift_cost * self.lift_cost_share
         return {
             "forward": forward_velocity_reward(dx, self.control_dt, self.task.reward_scale),
             "power": power_penalty(power, self.task.power_cost),
-            "lift": lift_penalty(float(self.cpg.params[1]), self.cpg_cfg.lower[1],
-                                 self.task.lift_cost * self.lift_cost_share),
+            "lift": lift_penalty(float(self.cpg.params[1]), self.cpg_cfg.lower[1], lift_cost),
             "failure": failure_penalty(termination, self.task.failure_penalty),
         }
+
+    def _lift_free(self, pos: np.ndarray, quat: np.ndarray) -> bool:
+        """Whether task.lift_free_zone waives the lift price this step: the terrain from `behind` m behind the body
+        to `ahead` m ahead of it rises or falls by more than a few cm (true terrain, seen by the reward only)."""
+        zone = self.task.lift_free_zone
+        if zone is None or self.task.lift_cost == 0.0 or not np.all(np.isfinite(pos)):
+            return False
+        return lift_waived(self.terrain.relief(float(pos[0]), float(pos[1]), quat_to_yaw(quat), *zone))
 
     def _termination(self, pos: np.ndarray, quat: np.ndarray) -> str | None:
         distance = float(pos[0] - self.start_xy[0])

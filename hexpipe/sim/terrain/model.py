@@ -230,6 +230,18 @@ class Terrain:
         top = float(self.height_at(x + d * c, y + d * s).max())
         return distance, top - float(self.height_at(x, y))
 
+    def relief(self, x: float, y: float, yaw: float, behind: float, ahead: float, half_width: float = 0.3) -> float:
+        """How far (m) the terrain rises and falls, max minus min, over the strip from `behind` m behind (x, y) to
+        `ahead` m ahead along heading `yaw` (rad), `half_width` m to either side: 0 on level ground, a block's
+        height while the strip holds one of its edges. Sampled every 5 cm along and at the centre and both
+        sides across; pure NumPy.
+        """
+        along = np.linspace(-behind, ahead, max(2, math.ceil((ahead + behind) / 0.05) + 1))[:, None]
+        across = np.array([-half_width, 0.0, half_width])[None, :]
+        c, s = math.cos(yaw), math.sin(yaw)
+        heights = self.height_at(x + along * c - across * s, y + along * s + across * c)
+        return float(heights.max() - heights.min())
+
     def to_dict(self) -> dict[str, Any]:
         """A JSON-serialisable description (heights as nested lists); inverse of `from_dict`."""
         return {
