@@ -11,13 +11,12 @@ timed directly, which is the sharper number: an env step is mostly physics.
 
 from __future__ import annotations
 
-import argparse
-import os
-import statistics
-import time
+import sys
 import timeit
+from pathlib import Path
 
-import numpy as np
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_lift_trail import arguments, interleaved_step_ms
 
 from hexpipe.config import TaskConfig
 from hexpipe.envs.hexapod import HexapodEnv
@@ -25,33 +24,11 @@ from hexpipe.envs.hexapod import HexapodEnv
 ZONES = {"zone on": (10.0, (0.4, 0.5)), "zone off": (10.0, None), "no price": (0.0, None)}
 
 
-def window(env: HexapodEnv, rng: np.random.Generator, steps: int) -> float:
-    start = time.perf_counter()
-    for _ in range(steps):
-        *_, terminated, truncated, _ = env.step(rng.uniform(-1.0, 1.0, 3))
-        if terminated or truncated:
-            env.reset()
-    return (time.perf_counter() - start) / steps
-
-
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--windows", type=int, default=9)
-    parser.add_argument("--steps", type=int, default=100)
-    parser.add_argument("--terrain", default="single_block")
-    args = parser.parse_args()
-    if hasattr(os, "sched_setaffinity"):
-        os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})
+    args = arguments(__doc__.splitlines()[0], "single_block")
     envs = {name: HexapodEnv(args.terrain, task=TaskConfig(sensors=(), lift_cost=cost, lift_free_zone=zone))
             for name, (cost, zone) in ZONES.items()}
-    rngs = {name: np.random.default_rng(0) for name in ZONES}
-    for env in envs.values():
-        env.reset(seed=0)
-    times: dict[str, list[float]] = {name: [] for name in ZONES}
-    for _ in range(args.windows):
-        for name in ZONES:
-            times[name].append(window(envs[name], rngs[name], args.steps))
-    step_ms = {name: 1e3 * statistics.median(t) for name, t in times.items()}
+    step_ms = interleaved_step_ms(envs, args.windows, args.steps)
     base = step_ms["no price"]
     print(f"env.step on {args.terrain}, medians of {args.windows} windows of {args.steps} steps:")
     for name, ms in step_ms.items():

@@ -29,28 +29,38 @@ def window(env: HexapodEnv, rng: np.random.Generator, steps: int) -> float:
     return (time.perf_counter() - start) / steps
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--windows", type=int, default=9)
-    parser.add_argument("--steps", type=int, default=100)
-    parser.add_argument("--terrain", default="flat")
-    args = parser.parse_args()
+def interleaved_step_ms(envs: dict[str, HexapodEnv], windows: int, steps: int) -> dict[str, float]:
+    """Median ms per env.step of each env, timed in interleaved windows on one core with the same seeded random
+    actions, so that machine noise hits every env alike. Also used by bench_lift_free.py."""
     if hasattr(os, "sched_setaffinity"):
         os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})
-    names = ("with", "without")
-    envs = {name: HexapodEnv(args.terrain, cpg=CpgConfig(lift_follows=name == "with"), task=TaskConfig(sensors=()))
-            for name in names}
-    rngs = {name: np.random.default_rng(0) for name in names}
+    rngs = {name: np.random.default_rng(0) for name in envs}
     for env in envs.values():
         env.reset(seed=0)
-    times: dict[str, list[float]] = {name: [] for name in names}
-    for _ in range(args.windows):
-        for name in names:
-            times[name].append(window(envs[name], rngs[name], args.steps))
-    with_ms, without_ms = (1e3 * statistics.median(times[n]) for n in names)
+    times: dict[str, list[float]] = {name: [] for name in envs}
+    for _ in range(windows):
+        for name, env in envs.items():
+            times[name].append(window(env, rngs[name], steps))
+    return {name: 1e3 * statistics.median(t) for name, t in times.items()}
+
+
+def arguments(description: str, terrain: str) -> argparse.Namespace:
+    """The benchmarks' shared options: --windows, --steps and --terrain."""
+    parser = argparse.ArgumentParser(description=description)
+    parser.add_argument("--windows", type=int, default=9)
+    parser.add_argument("--steps", type=int, default=100)
+    parser.add_argument("--terrain", default=terrain)
+    return parser.parse_args()
+
+
+def main() -> None:
+    args = arguments(__doc__.splitlines()[0], "flat")
+    envs = {name: HexapodEnv(args.terrain, cpg=CpgConfig(lift_follows=name == "with"), task=TaskConfig(sensors=()))
+            for name in ("with", "without")}
+    step_ms = interleaved_step_ms(envs, args.windows, args.steps)
+    with_ms, without_ms = step_ms["with"], step_ms["without"]
     print(f"env.step on {args.terrain}: {with_ms:.3f} ms with the following lift, {without_ms:.3f} ms without "
           f"({100 * (with_ms / without_ms - 1):+.1f}%; medians of {args.windows} windows of {args.steps} steps)")
-
 
 if __name__ == "__main__":
     main()
