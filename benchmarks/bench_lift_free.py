@@ -3,8 +3,9 @@ zone's check alone.
 
 Usage: python benchmarks/bench_lift_free.py [--windows 9] [--steps 100] [--terrain single_block]
 
-Three envs, the default config each but for the lift price and its zone (off; on at [0.4, 0.5] m; the price alone,
-the default's hot path), stepped with the same seeded random actions in interleaved windows on one core; medians
+Four envs, the default config each but for the lift price and its zone (off; on at [0.4, 0.5] m; on while
+ppo.lift_cost_ramp holds the price's share at 0, when the check is skipped; the price alone, the default's hot
+path), stepped with the same seeded random actions in interleaved windows on one core; medians
 are compared, so machine noise hits all alike. The check itself (one `Terrain.relief` over a 19 x 3 strip) is also
 timed directly, which is the sharper number: an env step is mostly physics.
 """
@@ -21,13 +22,17 @@ from bench_lift_trail import arguments, interleaved_step_ms
 from hexpipe.config import TaskConfig
 from hexpipe.envs.hexapod import HexapodEnv
 
-ZONES = {"zone on": (10.0, (0.4, 0.5)), "zone off": (10.0, None), "no price": (0.0, None)}
+# name: (task.lift_cost, task.lift_free_zone, the price's share now)
+ZONES = {"zone on": (10.0, (0.4, 0.5), 1.0), "ramp at 0": (10.0, (0.4, 0.5), 0.0), "zone off": (10.0, None, 1.0),
+         "no price": (0.0, None, 1.0)}
 
 
 def main() -> None:
     args = arguments(__doc__.splitlines()[0], "single_block")
     envs = {name: HexapodEnv(args.terrain, task=TaskConfig(sensors=(), lift_cost=cost, lift_free_zone=zone))
-            for name, (cost, zone) in ZONES.items()}
+            for name, (cost, zone, _) in ZONES.items()}
+    for name, (_, _, share) in ZONES.items():
+        envs[name].set_lift_cost_share(share)
     step_ms = interleaved_step_ms(envs, args.windows, args.steps)
     base = step_ms["no price"]
     print(f"env.step on {args.terrain}, medians of {args.windows} windows of {args.steps} steps:")

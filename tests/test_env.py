@@ -276,6 +276,23 @@ def test_a_lift_free_zone_waives_the_lift_price_near_the_block_and_charges_it_on
     assert near == [0.0] * len(near)
 
 
+def test_the_lift_free_zone_asks_the_terrain_nothing_while_the_lift_price_is_ramped_to_zero(monkeypatch):
+    """ppo.lift_cost_ramp holds the price's share at 0 for the first part of training: the zone's check (30 us a
+    step, benchmarks/bench_lift_free.py) is skipped there, and only there."""
+    task = TaskConfig(sensors=(), lift_cost=10.0, lift_free_zone=(0.6, 0.7))
+    env = HexapodEnv("single_block", cpg=holding(HIGH_GAIT), initial_cpg=HIGH_GAIT, task=task)
+    env.reset(seed=0)
+    asked = []
+    monkeypatch.setattr(env.terrain.__class__, "relief", lambda self, *args: asked.append(args) or 0.0)
+    env.set_lift_cost_share(0.0)
+    env.step(np.zeros(3))
+    assert asked == []
+    env.set_lift_cost_share(0.5)
+    _, _, _, _, info = env.step(np.zeros(3))
+    env.close()
+    assert len(asked) == 1 and info["reward_terms"]["lift"] == pytest.approx(-0.5 * 10.0 * (HIGH_GAIT[1] - 0.2))
+
+
 def test_giving_up_costs_the_failure_penalty_once_and_reaching_the_goal_costs_nothing():
     ends = {}
     for terrain, gait in (("single_block", LOW_GAIT), ("flat", None)):  # the low gait sticks at the block face

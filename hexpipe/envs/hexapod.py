@@ -263,7 +263,8 @@ class HexapodEnv(gym.Env):
         """Whether task.lift_free_zone waives the lift price this step: the terrain from `behind` m behind the body
         to `ahead` m ahead of it rises or falls by more than a few cm (true terrain, seen by the reward only)."""
         zone = self.task.lift_free_zone
-        if zone is None or self.task.lift_cost == 0.0 or not np.all(np.isfinite(pos)):
+        charged = self.task.lift_cost * self.lift_cost_share  # 0 during ppo.lift_cost_ramp's first part
+        if zone is None or charged == 0.0 or not np.all(np.isfinite(pos)):
             return False
         return lift_waived(self.terrain.relief(float(pos[0]), float(pos[1]), quat_to_yaw(quat), *zone))
 

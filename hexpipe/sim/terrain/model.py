@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cache, cached_property
 from typing import Any
 
 import numpy as np
@@ -130,6 +130,17 @@ class HeightField:
         return z
 
 
+@cache
+def _strip_offsets(behind: float, ahead: float, half_width: float) -> tuple[np.ndarray, np.ndarray]:
+    """`Terrain.relief`'s sample offsets (m): along the heading every 5 cm from -behind to ahead (a column) and
+    across it at the centre and both sides (a row). Cached, since a zone is fixed for a run; read-only."""
+    along = np.linspace(-behind, ahead, max(2, math.ceil((ahead + behind) / 0.05) + 1))[:, None]
+    across = np.array([-half_width, 0.0, half_width])[None, :]
+    along.flags.writeable = False
+    across.flags.writeable = False
+    return along, across
+
+
 @dataclass(frozen=True)
 class Terrain:
     """A concrete terrain: the ground plane (z = 0), static boxes and height fields, optional friction."""
@@ -236,8 +247,7 @@ class Terrain:
         height while the strip holds one of its edges. Sampled every 5 cm along and at the centre and both
         sides across; pure NumPy.
         """
-        along = np.linspace(-behind, ahead, max(2, math.ceil((ahead + behind) / 0.05) + 1))[:, None]
-        across = np.array([-half_width, 0.0, half_width])[None, :]
+        along, across = _strip_offsets(behind, ahead, half_width)
         c, s = math.cos(yaw), math.sin(yaw)
         heights = self.height_at(x + along * c - across * s, y + along * s + across * c)
         return float(heights.max() - heights.min())
