@@ -208,11 +208,13 @@ class TaskConfig(_Section):
     # 0.2 with the failure penalty: the price sweep's choice (reports/sweeps/penalty, reports/sweeps/price)
     power_cost: Annotated[float, Field(ge=0)] = 0.2
     # minus this much reward per rad of the lift b above cpg.lower's b, each control step: a price on the lift
-    # itself, which joint power barely charges on this robot (reports/experiments/README.md, "select"); 0 = off
-    lift_cost: Annotated[float, Field(ge=0)] = 0.0
+    # itself, which joint power barely charges on this robot (reports/experiments/README.md, "select"); 0 = off.
+    # 10, ramped in by ppo.lift_cost_ramp and waived by lift_free_zone: the lift_zone_feet sweep's recipe (7 seeds)
+    lift_cost: Annotated[float, Field(ge=0)] = 10.0
     # [behind, ahead] (m): the lift price is waived while the terrain from `behind` m behind the body to `ahead` m
-    # ahead of it rises or falls by more than 3 cm, so lifting costs only on level ground (null: charged everywhere)
-    lift_free_zone: tuple[Annotated[float, Field(ge=0)], Annotated[float, Field(ge=0)]] | None = None
+    # ahead of it rises or falls by more than 3 cm, so lifting costs only on level ground (null: charged everywhere).
+    # [0.6, 0.7]: the feet reach 0.57 m behind and ahead of the base (reports/experiments/lift_zone/feet.py)
+    lift_free_zone: tuple[Annotated[float, Field(ge=0)], Annotated[float, Field(ge=0)]] | None = (0.6, 0.7)
     # minus this much reward once when an episode ends stuck or fallen: with a high power price, giving up at the
     # block face otherwise pays better than a slow, costly climb (reports/experiments/README.md, "price"); 0 = off
     failure_penalty: Annotated[float, Field(ge=0)] = 1000.0
@@ -321,7 +323,7 @@ class PpoConfig(_Section):
     rise_readout: bool = False
     # [start, end] fractions of total_timesteps over which task.lift_cost rises from 0 to its value (null: the
     # whole price from the first step): learn to cross with the lift free, then be charged for it where not needed
-    lift_cost_ramp: tuple[Fraction, Fraction] | None = None
+    lift_cost_ramp: tuple[Fraction, Fraction] | None = (0.25, 0.75)
     checkpoint_every: PositiveInt = 20_000
     encoder_dir: str = "data/models/vae"
     out_dir: str = "data/models/ppo"
