@@ -8,13 +8,17 @@ whose trials ran in different sweeps: each side pools the records of one or more
 --stalls adds the failed episodes on the block courses, counted by where the feet were when each ended;
 --terrains adds each terrain's success, the mean over seeds of each seed's rate.
 --seeds 0,1,2,3 keeps only those training seeds on both sides (a paired comparison with a longer sweep).
+--paired adds the suite success of a minus b, seed by seed on the seeds both sides hold, with a bootstrap interval
+over whole seeds (the same draw of encoder and PPO seed on both sides, where the sweeps trained their encoders);
+--targets adds issue 10's targets judged on each side, as a sweep report judges them.
 """
 
 import argparse
 import json
 from pathlib import Path
 
-from hexpipe.sweep.tables import LEARNED, episodes_frame, improvements, per_seed
+from hexpipe.sweep.stats import bootstrap_mean
+from hexpipe.sweep.tables import LEARNED, episodes_frame, improvements, judge_targets, per_seed, target_parts
 
 BLOCK_COURSES = ("single_block", "extra_blocks", "wide_block", "tall_block", "block_near", "block_far")
 # stall_legs "none": stuck or fallen with no foot at a block face (on or past a block); "-": the episode ran out
@@ -50,11 +54,14 @@ def main() -> None:
                         "by where the feet were (evaluate's stall_legs)")
     parser.add_argument("--terrains", action="store_true", help="also print each terrain's success per side (mean "
                         "over seeds of each seed's success rate)")
+    parser.add_argument("--paired", action="store_true", help="also print the suite success of a minus b on the "
+                        "seeds both hold, with a bootstrap interval over whole seeds")
+    parser.add_argument("--targets", action="store_true", help="also judge issue 10's targets on each side")
     parser.add_argument("--seeds", help="comma-separated training seeds to keep on both sides (default: all)")
     args = parser.parse_args()
     keep = None if args.seeds is None else {int(s) for s in args.seeds.split(",")}
-    episodes = episodes_frame(records(args.a, "a", keep) + records(args.b, "b", keep))
-    episodes = episodes[episodes["controller"] == LEARNED]
+    everything = episodes_frame(records(args.a, "a", keep) + records(args.b, "b", keep))
+    episodes = everything[everything["controller"] == LEARNED]
     terrains = list(dict.fromkeys(episodes["terrain"]))
     result = improvements(per_seed(episodes), [("a", "b")], terrains)["a_vs_b"]["all"]
     pooled = episodes.groupby("condition")["success"].mean()
@@ -67,6 +74,23 @@ def main() -> None:
         table = rates.groupby(["terrain", "condition"]).mean().unstack().reindex(terrains)
         print("success per terrain (mean over seeds):")
         print(table.round(2).to_string())
+    if args.paired:
+        seeds_of = per_seed(episodes).pivot_table(index=["terrain", "train_seed"], columns="condition",
+                                                   values="success").dropna()
+        gap = (seeds_of["a"] - seeds_of["b"]).unstack("train_seed").reindex(terrains)
+        estimate = bootstrap_mean(list(gap.to_numpy()))
+        per = gap.mean(axis=0)
+        print(f"suite success a - b, paired on {gap.shape[1]} seeds: {estimate.value:+.3f} [{estimate.low:+.3f}, "
+              f"{estimate.high:+.3f}]; a ahead on {(per > 0).sum()} seeds, behind on {(per < 0).sum()}")
+    if args.targets:
+        judged = judge_targets(target_parts(everything, ["a", "b"], "flat"), ["a", "b"], "flat")
+        judged["value"] = judged.apply(lambda r: f"{r['value']:+.2f} [{r['low']:+.2f}, {r['high']:+.2f}]"
+                                       + (" met" if r["met"] else ""), axis=1)
+        print("issue 10's targets (worst terrain's value over seeds):")
+        print(judged.pivot(index="target", columns="condition", values="value")
+              .reindex(judged["target"].unique()).to_string())
+        print("met:", ", ".join(f"{c} {int(judged[judged['condition'] == c]['met'].sum())} of "
+                                f"{int((judged['condition'] == c).sum())}" for c in ("a", "b")))
     if args.stalls:
         failed = episodes[~episodes["success"] & episodes["terrain"].isin(BLOCK_COURSES)]
         where = failed["stall_legs"].fillna("-").map(lambda legs: STALL_KIND.get(legs, "a foot at a face"))
