@@ -1,12 +1,15 @@
-"""One markdown row per training seed of a lift-price condition, beside the same seed of `ramp10` (the `lift_ramp`
-sweep) and of the old default (`encoder_draw`, seed 6 from `draw678`): the table of the lift_zone_feet section.
+"""One markdown row per training seed of a lift-price condition, beside the same seed of reference conditions
+(default: `ramp10` of the `lift_ramp` sweep and `old_default`, the default before the lift price: `encoder_draw`,
+seed 6 from `draw678`): the tables of the lift_zone_feet and lift_zone_price sections.
 
     .venv/bin/python reports/experiments/lift_zone/seed_table.py lift_zone_feet feet10 0,1,2,3,4,5,6
+    .venv/bin/python reports/experiments/lift_zone/seed_table.py lift_zone_price feet30 0,1,2,3,4,5,6 \
+        lift_zone_feet:feet10 old_default
 
 Columns: success over the suite but flat ground; success on the single, extra, wide and tall block; b in the 0.3 m
 before the single block's face / on its open ground (rad, the lift in brackets, bold at the 0.15 target); on flat
 ground the mean b, the cost of transport and the time to goal of the episodes that arrived; then the suite, lift
-and flat b of the two references. Reads each trial's eval/results.csv under reports/sweeps/.
+and flat b of each reference. Reads each trial's eval/results.csv under reports/sweeps/.
 """
 
 from __future__ import annotations
@@ -32,15 +35,22 @@ def summary(trial: Path) -> dict:
             "flat_b": flat["b_mean"].mean(), "cot": arrived["cost_of_transport"].mean(), "time": arrived["time"].mean()}
 
 
-def reference(trial: Path) -> str:
+def reference(name: str, seed: int) -> str:
+    """A reference's suite, lift and flat b for `seed`; `name` is SWEEP:CONDITION or old_default."""
+    if name == "old_default":
+        trial = SWEEPS / ("encoder_draw" if seed < 6 else "draw678") / f"default-seed{seed}"
+    else:
+        sweep, _, condition = name.partition(":")
+        trial = SWEEPS / sweep / f"{condition}-seed{seed}"
     s = summary(trial)
     return f"{s['suite']:.2f}, {s['before'] - s['open']:+.2f}, flat b {s['flat_b']:.2f}"
 
 
 def main() -> None:
-    if len(sys.argv) != 4:
-        raise SystemExit(__doc__.strip().splitlines()[2].strip())
+    if len(sys.argv) < 4:
+        raise SystemExit("usage: seed_table.py SWEEP CONDITION SEEDS [SWEEP:CONDITION | old_default ...]")
     sweep, condition, seeds = sys.argv[1], sys.argv[2], [int(s) for s in sys.argv[3].split(",")]
+    references = sys.argv[4:] or ["lift_ramp:ramp10", "old_default"]
     for seed in seeds:
         trial = SWEEPS / sweep / f"{condition}-seed{seed}"
         if not (trial / "eval" / "results.csv").exists():
@@ -49,10 +59,9 @@ def main() -> None:
         lift = s["before"] - s["open"]
         shown = f"**{lift:+.2f}**" if lift >= 0.15 else f"{lift:+.2f}"
         blocks = " / ".join(f"{s['per'][t]:.1f}" for t in ("single_block", "extra_blocks", "wide_block", "tall_block"))
-        default = SWEEPS / ("encoder_draw" if seed < 6 else "draw678") / f"default-seed{seed}"
         print(f"| {seed} | {s['suite']:.2f} | {blocks} | {s['before']:.2f} / {s['open']:.2f} ({shown}) | "
               f"{s['flat_b']:.2f}, {s['cot']:.2f}, {s['time']:.1f} s | "
-              f"{reference(SWEEPS / 'lift_ramp' / f'ramp10-seed{seed}')} | {reference(default)} |")
+              + " | ".join(reference(name, seed) for name in references) + " |")
 
 
 if __name__ == "__main__":
