@@ -23,8 +23,11 @@ SWEEPS = Path("reports/sweeps")
 
 
 def summary(trial: Path) -> dict:
-    """The figures of one trial's learned policy (evaluate's results.csv)."""
-    results = pd.read_csv(trial / "eval" / "results.csv")
+    """The figures of one trial's learned policy (evaluate's results.csv); a missing trial is refused by name."""
+    path = trial / "eval" / "results.csv"
+    if not path.exists():
+        raise SystemExit(f"error: {path}: no such file (has that seed run?)")
+    results = pd.read_csv(path)
     policy = results[results["controller"] == "policy"]
     single = policy[policy["terrain"] == "single_block"]
     flat = policy[policy["terrain"] == "flat"]
@@ -49,13 +52,14 @@ def reference(name: str, seed: int) -> str:
 def main() -> None:
     if len(sys.argv) < 4:
         raise SystemExit("usage: seed_table.py SWEEP CONDITION SEEDS [SWEEP:CONDITION | old_default ...]")
-    sweep, condition, seeds = sys.argv[1], sys.argv[2], [int(s) for s in sys.argv[3].split(",")]
+    sweep, condition = sys.argv[1], sys.argv[2]
+    try:
+        seeds = [int(s) for s in sys.argv[3].split(",")]
+    except ValueError:
+        raise SystemExit(f"error: SEEDS: expected comma-separated integers, got {sys.argv[3]!r}") from None
     references = sys.argv[4:] or ["lift_ramp:ramp10", "old_default"]
     for seed in seeds:
-        trial = SWEEPS / sweep / f"{condition}-seed{seed}"
-        if not (trial / "eval" / "results.csv").exists():
-            raise SystemExit(f"error: {trial}/eval/results.csv: no such file (has seed {seed} run?)")
-        s = summary(trial)
+        s = summary(SWEEPS / sweep / f"{condition}-seed{seed}")
         lift = s["before"] - s["open"]
         shown = f"**{lift:+.2f}**" if lift >= 0.15 else f"{lift:+.2f}"
         blocks = " / ".join(f"{s['per'][t]:.1f}" for t in ("single_block", "extra_blocks", "wide_block", "tall_block"))
