@@ -9,7 +9,9 @@ whose trials ran in different sweeps: each side pools the records of one or more
 --terrains adds each terrain's success, the mean over seeds of each seed's rate.
 --seeds 0,1,2,3 keeps only those training seeds on both sides (a paired comparison with a longer sweep).
 --paired adds the suite success of a minus b, seed by seed on the seeds both sides hold, with a bootstrap interval
-over whole seeds (the same draw of encoder and PPO seed on both sides, where the sweeps trained their encoders);
+over whole seeds (the same draw of encoder and PPO seed on both sides, where the sweeps trained their encoders), and
+the same paired difference of flat ground's cost of transport and of the adaptation (b before the single block's
+face minus b on its open ground, rad);
 --targets adds issue 10's targets judged on each side, as a sweep report judges them.
 """
 
@@ -18,7 +20,15 @@ import json
 from pathlib import Path
 
 from hexpipe.sweep.stats import bootstrap_mean
-from hexpipe.sweep.tables import LEARNED, episodes_frame, improvements, judge_targets, per_seed, target_parts
+from hexpipe.sweep.tables import (
+    LEARNED,
+    adaptation_per_seed,
+    episodes_frame,
+    improvements,
+    judge_targets,
+    per_seed,
+    target_parts,
+)
 
 BLOCK_COURSES = ("single_block", "extra_blocks", "wide_block", "tall_block", "block_near", "block_far")
 # stall_legs "none": stuck or fallen with no foot at a block face (on or past a block); "-": the episode ran out
@@ -82,6 +92,15 @@ def main() -> None:
         per = gap.mean(axis=0)
         print(f"suite success a - b, paired on {gap.shape[1]} seeds: {estimate.value:+.3f} [{estimate.low:+.3f}, "
               f"{estimate.high:+.3f}]; a ahead on {(per > 0).sum()} seeds, behind on {(per < 0).sum()}")
+        flat = per_seed(episodes[episodes["terrain"] == "flat"])
+        for label, frame, column in (("flat cost of transport", flat, "cost_of_transport"),
+                                     ("adaptation (rad)", adaptation_per_seed(episodes), "adaptation")):
+            both = frame.pivot_table(index="train_seed", columns="condition", values=column).dropna()
+            if not {"a", "b"} <= set(both.columns) or both.empty:
+                print(f"{label} a - b: not measured on both sides")
+                continue
+            diff = bootstrap_mean([(both["a"] - both["b"]).to_numpy(float)])
+            print(f"{label} a - b, paired on {len(both)} seeds: {diff.value:+.3f} [{diff.low:+.3f}, {diff.high:+.3f}]")
     if args.targets:
         judged = judge_targets(target_parts(everything, ["a", "b"], "flat"), ["a", "b"], "flat")
         judged["value"] = judged.apply(lambda r: f"{r['value']:+.2f} [{r['low']:+.2f}, {r['high']:+.2f}]"
