@@ -76,8 +76,9 @@ def main() -> None:
     result = improvements(per_seed(episodes), [("a", "b")], terrains)["a_vs_b"]["all"]
     pooled = episodes.groupby("condition")["success"].mean()
     seeds = episodes.groupby("condition")["trial"].nunique()
-    print(f"P(a beats b) = {result['probability']:.2f} [{result['probability_low']:.2f}, "
-          f"{result['probability_high']:.2f}]; pooled success a {pooled['a']:.2f} ({seeds['a']} seeds), "
+    nan = float("nan")  # one seed on a side: the bootstrap gives no interval
+    print(f"P(a beats b) = {result.get('probability', nan):.2f} [{result.get('probability_low', nan):.2f}, "
+          f"{result.get('probability_high', nan):.2f}]; pooled success a {pooled['a']:.2f} ({seeds['a']} seeds), "
           f"b {pooled['b']:.2f} ({seeds['b']} seeds)")
     if args.terrains:
         rates = episodes.groupby(["condition", "terrain", "trial"])["success"].mean()
@@ -87,17 +88,21 @@ def main() -> None:
     if args.paired:
         seeds_of = per_seed(episodes).pivot_table(index=["terrain", "train_seed"], columns="condition",
                                                    values="success").dropna()
-        gap = (seeds_of["a"] - seeds_of["b"]).unstack("train_seed").reindex(terrains)
-        estimate = bootstrap_mean(list(gap.to_numpy()))
-        per = gap.mean(axis=0)
-        print(f"suite success a - b, paired on {gap.shape[1]} seeds: {estimate.value:+.3f} [{estimate.low:+.3f}, "
-              f"{estimate.high:+.3f}]; a ahead on {(per > 0).sum()} seeds, behind on {(per < 0).sum()}")
+        if not {"a", "b"} <= set(seeds_of.columns) or seeds_of.empty:
+            print("suite success a - b: no training seed on both sides (see --seeds)")
+        else:
+            gap = (seeds_of["a"] - seeds_of["b"]).unstack("train_seed").reindex(terrains)
+            estimate = bootstrap_mean(list(gap.to_numpy()))
+            per = gap.mean(axis=0)
+            print(f"suite success a - b, paired on {gap.shape[1]} seeds: {estimate.value:+.3f} "
+                  f"[{estimate.low:+.3f}, {estimate.high:+.3f}]; a ahead on {(per > 0).sum()} seeds, "
+                  f"behind on {(per < 0).sum()}")
         flat = per_seed(episodes[episodes["terrain"] == "flat"])
         for label, frame, column in (("flat cost of transport", flat, "cost_of_transport"),
                                      ("adaptation (rad)", adaptation_per_seed(episodes), "adaptation")):
             both = frame.pivot_table(index="train_seed", columns="condition", values=column).dropna()
             if not {"a", "b"} <= set(both.columns) or both.empty:
-                print(f"{label} a - b: not measured on both sides")
+                print(f"{label} a - b: not measured on a training seed of both sides")
                 continue
             diff = bootstrap_mean([(both["a"] - both["b"]).to_numpy(float)])
             print(f"{label} a - b, paired on {len(both)} seeds: {diff.value:+.3f} [{diff.low:+.3f}, {diff.high:+.3f}]")
