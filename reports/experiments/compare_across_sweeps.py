@@ -86,8 +86,8 @@ def main() -> None:
         print("success per terrain (mean over seeds):")
         print(table.round(2).to_string())
     if args.paired:
-        seeds_of = per_seed(episodes).pivot_table(index=["terrain", "train_seed"], columns="condition",
-                                                   values="success").dropna()
+        table = per_seed(episodes)
+        seeds_of = table.pivot_table(index=["terrain", "train_seed"], columns="condition", values="success").dropna()
         if not {"a", "b"} <= set(seeds_of.columns) or seeds_of.empty:
             print("suite success a - b: no training seed on both sides (see --seeds)")
         else:
@@ -97,7 +97,7 @@ def main() -> None:
             print(f"suite success a - b, paired on {gap.shape[1]} seeds: {estimate.value:+.3f} "
                   f"[{estimate.low:+.3f}, {estimate.high:+.3f}]; a ahead on {(per > 0).sum()} seeds, "
                   f"behind on {(per < 0).sum()}")
-        flat = per_seed(episodes[episodes["terrain"] == "flat"])
+        flat = table[table["terrain"] == "flat"]
         for label, frame, column in (("flat cost of transport", flat, "cost_of_transport"),
                                      ("adaptation (rad)", adaptation_per_seed(episodes), "adaptation")):
             both = frame.pivot_table(index="train_seed", columns="condition", values=column).dropna()
