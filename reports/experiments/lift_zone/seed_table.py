@@ -1,6 +1,6 @@
 """One markdown row per training seed of a lift-price condition, beside the same seed of reference conditions
 (default: `ramp10` of the `lift_ramp` sweep and `old_default`, the default before the lift price: `encoder_draw`,
-seed 6 from `draw678`): the tables of the lift_zone_feet and lift_zone_price sections.
+seed 6 from `draw678`): the per-seed tables of the lift_zone_* and zone_* sections of reports/experiments.
 
     .venv/bin/python reports/experiments/lift_zone/seed_table.py lift_zone_feet feet10 0,1,2,3,4,5,6
     .venv/bin/python reports/experiments/lift_zone/seed_table.py lift_zone_price feet30 0,1,2,3,4,5,6 \
