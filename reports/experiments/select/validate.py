@@ -5,9 +5,12 @@
 Each TRIAL_DIR is a sweep trial's data folder (data/sweeps/NAME/COND-seedN, holding ppo/). Every policy runs the
 same `--episodes` episodes of `varied` at full difficulty, seeds 5000.. (evaluate uses 1000..; training draws its
 own), deterministic, with params.yaml as the sweep trials ran it (the default conditions: nothing to override).
-Writes one row per episode: trial, seed, success, distance, energy (J), termination, time, and the episode's
-return under the default training reward (reward_scale x control_hz per m, -power_cost x control_hz per J,
--failure_penalty on a stuck or fallen end; params.yaml's task.lift_cost is 0, so no lift term).
+Writes one row per episode: trial, seed, success, distance, energy (J), termination, time, and two returns:
+- `return`: the power-price reward as `select` measured it (reward_scale x control_hz per m, -power_cost x
+  control_hz per J, -failure_penalty on a stuck or fallen end), with no lift term;
+- `env_return`: the sum of the env's own rewards, so the whole training reward of params.yaml's task, the lift
+  price (task.lift_cost, waived in task.lift_free_zone) included, as train-ppo charges it once its ramp is done.
+`--set section.key=value` overrides params.yaml as the sweep's condition did (e.g. task.lift_cost=10).
 """
 
 from __future__ import annotations
@@ -28,19 +31,20 @@ from hexpipe.evaluation.suite import load_scenarios
 SEED0 = 5000
 
 
-def _one(args: tuple[str, int]) -> dict:
-    trial, seed = args
-    params = load_params("params.yaml")
+def _one(args: tuple[str, int, tuple[str, ...]]) -> dict:
+    trial, seed, overrides = args
+    params = load_params("params.yaml", overrides=list(overrides))
     scenario = load_scenarios(["varied"])[0]
     job = EpisodeJob(scenario, ControllerSpec("policy", str(Path(trial) / "ppo")), seed - SEED0, seed)
-    row = run_episode(params, job).row
+    rewards: list[float] = []
+    row = run_episode(params, job, on_step=lambda _env, reward, _info, _ended: rewards.append(reward)).row
     task = params.task
     failed = row["termination"] in FAILURES
     ret = (task.reward_scale / (1.0 / params.sim.control_hz) * row["distance"]
            - task.power_cost * params.sim.control_hz * row["energy_j"] - task.failure_penalty * failed)
     return {"trial": trial, "seed": seed, "success": row["success"], "termination": row["termination"],
             "distance": row["distance"], "time": row["time"], "energy_j": row["energy_j"],
-            "b_mean": row["b_mean"], "return": ret}
+            "b_mean": row["b_mean"], "return": ret, "env_return": sum(rewards)}
 
 
 def main() -> None:
@@ -49,8 +53,9 @@ def main() -> None:
     ap.add_argument("trials", nargs="+")
     ap.add_argument("--episodes", type=int, default=40)
     ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--set", dest="overrides", action="append", default=[], metavar="SECTION.KEY=VALUE")
     a = ap.parse_args()
-    jobs = [(t, SEED0 + i) for t in a.trials for i in range(a.episodes)]
+    jobs = [(t, SEED0 + i, tuple(a.overrides)) for t in a.trials for i in range(a.episodes)]
     with ProcessPoolExecutor(a.workers) as pool:
         rows = list(pool.map(_one, jobs, chunksize=4))
     out = Path(a.out)
