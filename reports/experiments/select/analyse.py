@@ -8,8 +8,9 @@ Joins validate.py's episodes (per trial: mean return, success, energy per m on `
 results from the sweep reports (success over the suite but flat ground, the lift on single_block, flat cost of
 transport), prints Spearman's rho of each validation score against each outcome, then the best-of-K selection:
 for every K-subset of a condition's seeds, the trial with the highest validation return, averaged over subsets,
-against the mean of single trials; then, splitting the trials at a lift of LIFTS rad on single_block, their
-validation episodes by layout kind (flat, rough, 1-3 blocks: `varied` realised with each episode's seed).
+against the mean of single trials, and that gain with a 95% bootstrap interval over whole trials; then,
+splitting the trials at a lift of LIFTS rad on single_block, their validation episodes by layout kind (flat,
+rough, 1-3 blocks: `varied` realised with each episode's seed).
 `--score` picks the validation return that ranks: `return` (the power price alone, `select`'s) or `env_return`
 (the env's whole reward, lift price included; validate.py writes both).
 """
@@ -18,8 +19,10 @@ from __future__ import annotations
 
 import argparse
 import itertools
+import math
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 from gymnasium.utils import seeding
 from scipy.stats import spearmanr
@@ -56,6 +59,27 @@ def suite_outcomes(sweep: Path) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
+def expected_best_of_k(score: np.ndarray, outcome: np.ndarray, k: int) -> float:
+    """The mean outcome of the highest-scoring trial over every k-subset of the trials, exactly: the trial ranked
+    r-th lowest (ties broken by position) is the pick of C(r-1, k-1) of the C(n, k) subsets."""
+    order = np.argsort(score, kind="stable")
+    weights = np.array([math.comb(r, k - 1) for r in range(len(score))]) / math.comb(len(score), k)
+    return float(weights @ outcome[order])
+
+
+def best_of_k_gain(score: np.ndarray, outcome: np.ndarray, k: int, resamples: int = 10000,
+                   seed: int = 0) -> tuple[float, float, float]:
+    """Best of k by score minus a single trial's mean outcome, with a 95% percentile bootstrap over whole trials."""
+    gain = expected_best_of_k(score, outcome, k) - outcome.mean()
+    rng = np.random.default_rng(seed)
+    draws = []
+    for _ in range(resamples):
+        idx = rng.integers(0, len(score), len(score))
+        draws.append(expected_best_of_k(score[idx], outcome[idx], k) - outcome[idx].mean())
+    low, high = np.percentile(draws, [2.5, 97.5])
+    return gain, float(low), float(high)
+
+
 def main(validation: str, sweeps: list[str], score: str = "return") -> None:
     val = pd.read_csv(validation)
     if score not in val.columns:
@@ -82,6 +106,10 @@ def main(validation: str, sweeps: list[str], score: str = "return") -> None:
                   f"worst {best['suite'].min():.2f} ({g['suite'].min():.2f}), "
                   f"lift >= {TARGET_LIFT} in {(best['lift'] >= TARGET_LIFT).mean():.2f} of picks "
                   f"({(g['lift'] >= TARGET_LIFT).mean():.2f} of trials)")
+            for outcome in ("lift", "suite"):
+                gain, low, high = best_of_k_gain(g["v_return"].to_numpy(), g[outcome].to_numpy(), k)
+                print(f"  best of {k} minus a single trial, {outcome}: {gain:+.3f} [{low:+.3f}, {high:+.3f}] "
+                      f"(95% bootstrap over trials)")
     val = val.join(table["lift"], on="trial", how="inner")
     val["lifts"] = val["lift"] >= LIFTS
     val["layout"] = val["seed"].map({s: layout_kind(s) for s in val["seed"].unique()})

@@ -7,7 +7,8 @@ For each SWEEP_FOLDER:CONDITION, each trial's mean training-episode return (repo
 episodes.jsonl) over the episodes that ended after `--after` of the trial's last logged step (0.75: once
 ppo.lift_cost_ramp has the whole price on), and its lift price per episode, joined with the trial's suite results
 (analyse.py's suite_outcomes); prints the table, Spearman's rho of the return against each outcome, and the best
-of 3 by that return over every 3-subset of the trials pooled, against single trials. The training episodes mix
+of 3 by that return over every 3-subset of the trials pooled, against single trials (the gain with a bootstrap
+interval over whole trials). The training episodes mix
 curriculum levels and domain randomisation, so this is a noisier score than validate.py's.
 """
 
@@ -19,7 +20,7 @@ import json
 from pathlib import Path
 
 import pandas as pd
-from analyse import TARGET_LIFT, suite_outcomes
+from analyse import TARGET_LIFT, best_of_k_gain, suite_outcomes
 from scipy.stats import spearmanr
 
 
@@ -66,6 +67,10 @@ def main() -> None:
           f"(single {table['suite'].mean():.3f}), lift {picks['lift'].mean():+.3f} ({table['lift'].mean():+.3f}), "
           f"lift >= {TARGET_LIFT} in {(picks['lift'] >= TARGET_LIFT).mean():.2f} of picks "
           f"({(table['lift'] >= TARGET_LIFT).mean():.2f} of trials), worst suite {picks['suite'].min():.2f}")
+    for outcome in ("lift", "suite"):
+        gain, low, high = best_of_k_gain(table["t_return"].to_numpy(), table[outcome].to_numpy(), 3)
+        print(f"  best of 3 minus a single trial, {outcome}: {gain:+.3f} [{low:+.3f}, {high:+.3f}] "
+              "(95% bootstrap over trials)")
 
 
 if __name__ == "__main__":
