@@ -91,10 +91,10 @@ def main(validation: str, sweeps: list[str], score: str = "return") -> None:
     table = scores.join(outcomes, how="inner")
     print(f"v_return: the mean validation {score}")
     print(table.round(3).to_string())
-    for score in ("v_return", "v_success", "v_energy_per_m", "v_b"):
+    for column in ("v_return", "v_success", "v_energy_per_m", "v_b"):
         for outcome in ("suite", "extra", "lift", "flat_cot"):
-            rho, p = spearmanr(table[score], table[outcome])
-            print(f"{score:>15} vs {outcome:<8} rho {rho:+.2f} (p {p:.2f}, {len(table)} trials)")
+            rho, p = spearmanr(table[column], table[outcome])
+            print(f"{column:>15} vs {outcome:<8} rho {rho:+.2f} (p {p:.2f}, {len(table)} trials)")
     for condition, g in table.groupby("condition"):
         for k in (2, 3):
             picks = [g.loc[list(sub)].sort_values("v_return").iloc[-1] for sub in itertools.combinations(g.index, k)]
