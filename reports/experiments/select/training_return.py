@@ -8,8 +8,8 @@ episodes.jsonl) over the episodes that ended after `--after` of the trial's last
 ppo.lift_cost_ramp has the whole price on), and its lift price per episode, joined with the trial's suite results
 (analyse.py's suite_outcomes); prints the table, Spearman's rho of the return against each outcome, and the best
 of 3 by that return over every 3-subset of the trials pooled, against single trials (the gain with a bootstrap
-interval over whole trials). The training episodes mix
-curriculum levels and domain randomisation, so this is a noisier score than validate.py's.
+interval over whole trials). The training episodes mix curriculum levels and domain randomisation, so this is a
+noisier score than validate.py's.
 """
 
 from __future__ import annotations

@@ -22,7 +22,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from hexpipe.config import load_params
+from hexpipe.config import ConfigError, load_params
 from hexpipe.envs.rewards import FAILURES
 from hexpipe.evaluation.controllers import ControllerSpec
 from hexpipe.evaluation.episodes import EpisodeJob, run_episode
@@ -55,6 +55,10 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--set", dest="overrides", action="append", default=[], metavar="SECTION.KEY=VALUE")
     a = ap.parse_args()
+    try:
+        load_params("params.yaml", overrides=a.overrides)  # a bad key or value: one line here, not in every worker
+    except ConfigError as exc:
+        raise SystemExit(f"error: {exc}") from None
     jobs = [(t, SEED0 + i, tuple(a.overrides)) for t in a.trials for i in range(a.episodes)]
     with ProcessPoolExecutor(a.workers) as pool:
         rows = list(pool.map(_one, jobs, chunksize=4))
