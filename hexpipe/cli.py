@@ -144,24 +144,28 @@ def train_ppo_cmd(
     set_: SetOpt = None,
     resume: Annotated[bool, typer.Option(help="continue from the newest checkpoint in ppo.out_dir")] = False,
 ) -> None:
-    """Train PPO on the CPG parameters with the frozen terrain encoder (or blind, ppo.blind=true)."""
-    from hexpipe.rl.train import train_ppo
+    """Train PPO on the CPG parameters with the frozen terrain encoder (or blind, ppo.blind=true); with
+    ppo.candidates > 1, train that many seeds and keep the best on held-out validation episodes."""
+    from hexpipe.rl.selection import train_policy
 
     cfg = load(params, set_)
     writable(cfg.ppo.out_dir, cfg.ppo.report_dir)
     with user_errors():
-        metrics = train_ppo(cfg, resume=resume)
+        metrics = train_policy(cfg, resume=resume, say=lambda line: console.print(line, highlight=False))
+    chosen = (f"; kept seed {metrics['selection/chosen_seed']} of {cfg.ppo.candidates}" if cfg.ppo.candidates > 1
+              else "")
     if metrics.get("finished"):
-        console.print(f"train-ppo: nothing to do: the run in {cfg.ppo.out_dir} already reached {metrics['timesteps']} "
-                      "steps under the same params, code and encoder (raise ppo.total_timesteps to train on)")
+        console.print(f"train-ppo: nothing to do: the run in {cfg.ppo.out_dir} already reached "
+                      f"{metrics['timesteps']} steps under the same params, code and encoder (raise "
+                      f"ppo.total_timesteps to train on){chosen}")
         return
-    rate = metrics["time/train_steps_per_s"]
+    rate = metrics.get("time/train_steps_per_s")
     speed = (f"{rate:.0f} steps/s ({metrics['time/train_vs_bare']:.0%} of the bare env's "
              f"{metrics['time/bare_env_steps_per_s']:.0f})" if rate and metrics.get("time/train_vs_bare") is not None
              else "no steps taken now (policy re-exported)")
     console.print(
         f"train-ppo: {metrics['timesteps']} steps, success {metrics.get('episode/success_rate', 0):.0%} "
-        f"(last 20 episodes), {speed}"
+        f"(last 20 episodes), {speed}{chosen}"
     )
 
 

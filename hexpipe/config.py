@@ -325,6 +325,11 @@ class PpoConfig(_Section):
     # [start, end] fractions of total_timesteps over which task.lift_cost rises from 0 to its value (null: the
     # whole price from the first step): learn to cross with the lift free, then be charged for it where not needed
     lift_cost_ramp: tuple[Fraction, Fraction] | None = (0.25, 0.75)
+    # best of K (hexpipe/rl/selection.py): train seeds seed, seed + 1000, ... and keep the one with the highest mean
+    # return on validation_episodes held-out episodes of train_terrains (issue 10, select30: the draw decides whether
+    # a policy lifts, and the task's return ranks the draws that lift higher). 1: one run, still validated
+    candidates: PositiveInt = 3
+    validation_episodes: Annotated[int, Field(ge=0)] = 60  # 0: no validation (then candidates must be 1)
     checkpoint_every: PositiveInt = 20_000
     encoder_dir: str = "data/models/vae"
     out_dir: str = "data/models/ppo"
@@ -343,6 +348,8 @@ class PpoConfig(_Section):
             raise ValueError("rise_readout reads the terrain encoder, which a blind policy (blind: true) has not")
         if self.lift_cost_ramp is not None and not self.lift_cost_ramp[0] < self.lift_cost_ramp[1]:
             raise ValueError(f"lift_cost_ramp: expected [start, end] with start < end, got {list(self.lift_cost_ramp)}")
+        if self.candidates > 1 and self.validation_episodes == 0:
+            raise ValueError(f"candidates={self.candidates} needs validation_episodes > 0 to choose among them")
         if self.use_sde and self.privileged_critic:
             raise ValueError("use_sde with privileged_critic is not supported: gSDE's noise reads the actor's "
                              "features, which the asymmetric policy splits from the critic's; set one of them to false")

@@ -97,6 +97,7 @@ def build_summary(params: Params, collect_report: Path, root: Path) -> str:
                   "", "| metric | value |", "|---|---|"]
         lines += [f"| {k} | {_fmt(v)} |" for k, v in rows.items() if v is not None]
         lines += _made_on(ppo)
+        lines += _selection(_read(ppo_dir / "selection.json"))
         lines += ["", _image(ppo_dir / "training_curve.png", root, "episode reward and success against timesteps"), ""]
 
     lines += ["## 4. evaluate: terrain never seen in training", ""]
@@ -119,6 +120,20 @@ def build_summary(params: Params, collect_report: Path, root: Path) -> str:
         for png in sorted(eval_dir.glob("*.png")):
             lines += [_image(png, root, png.stem), ""]
     return "\n".join(lines) + "\n"
+
+
+def _selection(record: dict | None) -> list[str]:
+    """train-ppo's candidates (ppo.candidates), each with its validation scores, and the one kept."""
+    if not record or not record.get("candidates"):
+        return []
+    v = record["validation"]
+    lines = ["", f"Validation: {v['episodes']} held-out episodes of {', '.join(v['terrains'])} (seeds "
+             f"{v['first_seed']}..) per candidate; the highest mean return is kept, and the table above is its run.",
+             "", "| seed | validation return | success | mean lift b (rad) | kept |", "|---|---|---|---|---|"]
+    for seed, s in record["candidates"].items():
+        kept = "yes" if str(record["chosen_seed"]) == seed else ""
+        lines.append(f"| {seed} | {s['return']:.1f} | {s['success']:.2f} | {s['b_mean']:.2f} | {kept} |")
+    return lines
 
 
 def _made_on(stage: dict) -> list[str]:

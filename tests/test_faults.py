@@ -288,7 +288,8 @@ def test_train_vae_reads_only_the_manifest_episodes(tmp_path):
 
 
 def test_train_ppo_resume_of_a_finished_run_says_so(tmp_path):
-    args = ["train-ppo", "--resume", "--set", "ppo.blind=true", "--set", "ppo.n_envs=1", "--set", "ppo.n_steps=64",
+    args = ["train-ppo", "--resume", "--set", "ppo.candidates=1", "--set", "ppo.validation_episodes=2",
+            "--set", "ppo.blind=true", "--set", "ppo.n_envs=1", "--set", "ppo.n_steps=64",
             "--set", "ppo.batch_size=64", "--set", "ppo.n_epochs=1", "--set", "ppo.total_timesteps=64",
             "--set", "ppo.train_terrains=[single_block]", "--set", "task.time_limit=2.0",
             "--set", f"ppo.out_dir={tmp_path / 'ppo'}", "--set", f"ppo.report_dir={tmp_path / 'r'}"]

@@ -21,7 +21,7 @@ SMOKE = [
     "collect.episodes=3", "collect.max_seconds=3", "collect.workers=2",
     "vae.epochs=2", "vae.batch_size=32",
     "ppo.total_timesteps=256", "ppo.n_envs=2", "ppo.n_steps=64", "ppo.batch_size=64", "ppo.n_epochs=1",
-    "ppo.checkpoint_every=128",
+    "ppo.checkpoint_every=128", "ppo.validation_episodes=2",  # and the default ppo.candidates: best of 3
     "task.time_limit=3.0",
     "eval.terrains=[single_block, extra_blocks]", "eval.episodes=1", "eval.log_episodes=1",
     "eval.grid_a=[0.25]", "eval.grid_b=[0.4]", "eval.grid_omega=[4.7]",
@@ -64,6 +64,10 @@ def test_dvc_repro_runs_all_stages_then_nothing_then_only_what_changed(tmp_path)
     assert "policy" in table["single_block"] and "open_loop" in table["single_block"]
     assert (repo / "reports/README.md").read_text().count("not run yet") == 0
     assert (repo / "reports/ppo/training_curve.png").is_file()
+    chosen = json.loads((repo / "reports/ppo/selection.json").read_text())  # best of the default 3 candidates
+    assert sorted(chosen["candidates"]) == ["0", "1000", "2000"] and str(chosen["chosen_seed"]) in chosen["candidates"]
+    summary = (repo / "reports/README.md").read_text()
+    assert f"| {chosen['chosen_seed']} | " in summary and "| seed | validation return |" in summary
     played = run(["hexpipe", "play"], repo)  # after the pipeline, with no options: the policy it trained
     assert "play: policy from data/models/ppo on single_block, seed 1000" in played and "termination" in played
 
@@ -90,7 +94,7 @@ def test_dvc_repro_runs_all_stages_then_nothing_then_only_what_changed(tmp_path)
     proc = subprocess.Popen(["dvc", "repro"], cwd=repo, env=env, stdout=log, stderr=subprocess.STDOUT,
                             start_new_session=True)
     deadline = time.time() + 300
-    while time.time() < deadline and not list((repo / "data/models/ppo/checkpoints").glob("step-*")):
+    while time.time() < deadline and not list((repo / "data/models/ppo").rglob("checkpoints/step-*")):
         time.sleep(0.1)
     os.killpg(proc.pid, signal.SIGKILL)
     proc.wait(timeout=60)
@@ -100,3 +104,4 @@ def test_dvc_repro_runs_all_stages_then_nothing_then_only_what_changed(tmp_path)
 
     metrics = run(["dvc", "metrics", "show", "--json"], repo)
     assert "reports/eval/metrics.json" in metrics and "reports/ppo/metrics.json" in metrics
+    assert "reports/ppo/selection.json" in metrics

@@ -31,7 +31,7 @@ HEXPIPE = [sys.executable, "-m", "hexpipe.cli"]
 TINY = ["ppo.total_timesteps=64", "ppo.n_steps=64", "ppo.batch_size=64", "ppo.n_epochs=1", "ppo.n_envs=1",
         "ppo.train_terrains=[single_block]", "task.time_limit=2.0", "eval.terrains=[single_block]",
         "eval.episodes=1", "eval.grid_a=[0.3]", "eval.grid_b=[0.3]", "eval.grid_omega=[4.712389]", "eval.workers=1",
-        "sweep.resamples=200"]
+        "sweep.resamples=200", "ppo.candidates=1", "ppo.validation_episodes=2"]
 
 
 @pytest.fixture
@@ -143,6 +143,7 @@ def test_tiny_sweep_on_local_ray_records_a_failed_trial_and_goes_on(tmp_path, ra
 
     record = json.loads((out / "seeing-seed1" / "result.json").read_text())
     assert record["status"] == "ok" and record["seed"] == 1 and record["node"]
+    assert record["selection"]["chosen_seed"] == 1 and record["selection"]["candidates"]["1"]["episodes"] == 2
     assert "ip=127.0.0.1" in failure["traceback"]  # the local cluster stays on loopback
     assert {e["controller"] for e in record["episodes"]} == {"policy", "best_fixed", "open_loop"}
     assert (tmp_path / "data" / "tiny" / "seeing-seed1" / "ppo" / "policy" / "model.zip").is_file()

@@ -39,6 +39,7 @@ from hexpipe.workers import die_with_parent
 
 POLICY_CONFIG = "policy.json"
 PPO_SPEED = ("time",)  # dvclive's time/* metrics: steps per second, measured, not results
+SELECTION_ONLY = ("candidates", "validation_episodes")  # ppo keys that choose among runs but change none of them
 
 
 def env_factory(params: Params, terrain: str, encoder: Encoder | None, randomize: bool) -> Callable[[], gym.Env]:
@@ -157,7 +158,7 @@ def training_signature(params: Params, encoder_dir: str | Path | None = None) ->
     """Hash of everything a checkpoint depends on except the budget (params, code and, unless blind, the encoder's
     files): resuming under anything else is refused. The budget is left out so a longer run extends a shorter one;
     `prepare_checkpoints` makes sure a shorter one never reuses a longer one."""
-    base = params_hash(params, ppo={"total_timesteps", "checkpoint_every", "report_dir"})
+    base = params_hash(params, ppo={"total_timesteps", "checkpoint_every", "report_dir", *SELECTION_ONLY})
     return base if encoder_dir is None else f"{base}-{encoder_fingerprint(encoder_dir)}"
 
 

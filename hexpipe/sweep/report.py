@@ -245,7 +245,8 @@ def markdown(report: SweepReport, front: list[str] | None) -> str:
         f"# Sweep `{report.name}`",
         f"Produced by:\n\n```\n{report.command}\n```",
         "Each trial trains PPO with its own seed (`ppo.seed`) and evaluates the policy on the same seeded episodes "
-        "(`eval.seed`). "
+        "(`eval.seed`); with `ppo.candidates` K above 1 it trains seeds seed, seed + 1000, ... and evaluates the one "
+        "with the best validation return, as `train-ppo` does (each trial's `selection.json`). "
         + ("Each trial also trains its own encoder with `vae.seed` = its seed (`sweep.train_encoder`): the spread "
            "over seeds includes the encoder's draw; the Trials table names each encoder and its rise probes. "
            if own_encoders else "")

@@ -1,5 +1,5 @@
-"""One trial: (train-vae, with sweep.train_encoder,) train-ppo then evaluate under the trial's Params, and the record
-of what it measured.
+"""One trial: (train-vae, with sweep.train_encoder,) train-ppo (every candidate, validated) then evaluate under the
+trial's Params, and the record of what it measured.
 
 Runs wherever Ray puts it (a worker process, maybe on another node) or in-process; it only needs the project
 folder at the same path (relative paths in the params, such as ppo.encoder_dir, resolve against it).
@@ -41,14 +41,14 @@ def run_trial(params: Params, root: str | None = None) -> dict[str, Any]:
     record: the trial's seconds, where it ran, PPO's final training figures and every evaluated episode."""
     from hexpipe.evaluation.run import evaluate
     from hexpipe.provenance import code_fingerprint
-    from hexpipe.rl.train import train_ppo
+    from hexpipe.rl.selection import SELECTION, train_policy
 
     if root is not None:
         os.chdir(root)
     started = time.perf_counter()
     encoder = train_encoder(params) if params.sweep.train_encoder else None
     encoded = time.perf_counter()
-    metrics = train_ppo(params, resume=True, show_progress=False)
+    metrics = train_policy(params, resume=True, show_progress=False)
     trained = time.perf_counter()
     evaluate(params, show_progress=False)
     finished = time.perf_counter()
@@ -58,6 +58,7 @@ def run_trial(params: Params, root: str | None = None) -> dict[str, Any]:
         "host": socket.gethostname(), "node": _node_id(), "code": code_fingerprint(),
         **({"vae": encoder} if encoder is not None else {}),
         "ppo": {k: v for k, v in metrics.items() if not k.startswith("time/") and v is not None},
+        "selection": json.loads((Path(params.ppo.report_dir) / SELECTION).read_text()),  # every candidate's scores
         "episodes": read_episodes(Path(params.eval.report_dir) / "results.csv"),
     }
 
