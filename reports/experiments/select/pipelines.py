@@ -1,0 +1,111 @@
+"""Whole pipelines with best of 3: for each pipeline seed p whose three candidates (p, p+1000, p+2000) were trained
+and evaluated as sweep trials, the one train-ppo keeps (the highest mean validation return), against the single
+run a pipeline without selection trains (candidate p), judged on issue 10's targets over pipelines.
+
+    .venv/bin/python reports/experiments/select/pipelines.py reports/sweeps/epyc30 reports/sweeps/cand ... \
+        [--validation reports/experiments/select/select30_validation.csv ...]
+
+A trial's validation return is the `selection.json` its sweep record carries (trials run since ppo.candidates,
+which train-ppo scores itself), or else the mean `env_return` of its episodes in a validate.py CSV (the same
+60 episodes and the same sum: validate.py and hexpipe/rl/selection.py agree to the last digit on seed 0's first
+four). Trials are matched by their data folder, data/sweeps/NAME/TRIAL.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from hexpipe.rl.selection import SEED_STRIDE, candidate_seeds, choose
+from hexpipe.sweep import tables
+
+CANDIDATES = 3
+SINGLE, BEST = "single", "best3"
+
+
+def load_records(sweeps: list[Path]) -> list[dict]:
+    records = []
+    for sweep in sweeps:
+        for path in sorted(sweep.glob("*/result.json")):
+            record = json.loads(path.read_text())
+            if record.get("status") == "ok":
+                records.append({**record, "data": f"data/sweeps/{sweep.name}/{path.parent.name}"})
+    return records
+
+
+def validation_return(record: dict, csv: pd.Series) -> float:
+    selection = record.get("selection") or {}
+    own = selection.get("candidates", {}).get(str(record["seed"]))
+    if own is not None:
+        return float(own["return"])
+    if record["data"] in csv.index:
+        return float(csv[record["data"]])
+    return float("nan")
+
+
+def main(sweeps: list[Path], validations: list[Path], flat: str = "flat") -> None:
+    csv = (pd.concat([pd.read_csv(v) for v in validations]).groupby("trial")["env_return"].mean()
+           if validations else pd.Series(dtype=float))
+    records = load_records(sweeps)
+    by_seed = {}
+    for record in records:
+        record["v_return"] = validation_return(record, csv)
+        by_seed.setdefault(record["seed"], record)  # the first sweep named wins a seed run twice
+    pipelines = sorted({s % SEED_STRIDE for s in by_seed
+                        if all(c in by_seed for c in candidate_seeds(s % SEED_STRIDE, CANDIDATES))})
+    rows, chosen_records, single_records = [], [], []
+    for p in pipelines:
+        cands = [by_seed[c] for c in candidate_seeds(p, CANDIDATES)]
+        returns = [c["v_return"] for c in cands]
+        if any(np.isnan(returns)):
+            print(f"pipeline {p}: a candidate has no validation return ({[c['data'] for c in cands]}); left out")
+            continue
+        kept = cands[choose(returns)]
+        chosen_records.append({**kept, "condition": BEST, "seed": p})
+        single_records.append({**cands[0], "condition": SINGLE, "seed": p})
+        rows.append({"pipeline": p, **{f"return_{c['seed']}": round(r, 1) for c, r in zip(cands, returns)},
+                     "kept": kept["seed"]})
+    print(pd.DataFrame(rows).to_string(index=False))
+    episodes = tables.episodes_frame(chosen_records + single_records)
+    outcome = outcomes(episodes)
+    print("\nper pipeline (policy, sweep-scale evaluation): suite = success on every terrain but flat ground")
+    print(outcome.round(3).to_string())
+    parts = tables.target_parts(episodes, [BEST, SINGLE], flat)
+    judged = tables.judge_targets(parts, [BEST, SINGLE], flat)
+    print("\nissue 10's targets over pipelines (mean over pipelines, 95% bootstrap over pipelines; worst terrain):")
+    for row in judged.itertuples():
+        print(f"{row.condition:>7} {row.target:<24} {row.terrain:<13} {row.value:+.3f} [{row.low:+.3f}, "
+              f"{row.high:+.3f}] {'met' if row.met else 'missed'} ({row.seeds} pipelines)")
+    for condition in (BEST, SINGLE):
+        mine = judged[judged["condition"] == condition]
+        print(f"{condition}: {int(mine['met'].sum())} of {len(mine)} targets met")
+    paired = outcome.pivot(index="pipeline", columns="condition")
+    for column in ("lift", "suite", "extra"):
+        diff = (paired[column][BEST] - paired[column][SINGLE]).to_numpy(float)
+        print(f"best3 - single, {column}: mean {diff.mean():+.3f} over {len(diff)} pipelines "
+              f"(changed in {(np.abs(diff) > 1e-9).sum()}; per pipeline {np.round(diff, 3).tolist()})")
+
+
+def outcomes(episodes: pd.DataFrame) -> pd.DataFrame:
+    policy = episodes[episodes["controller"] == tables.LEARNED]
+    lift = tables.adaptation_per_seed(episodes).set_index(["condition", "train_seed"])["adaptation"]
+    rows = []
+    for (condition, seed), g in policy.groupby(["condition", "train_seed"]):
+        flat = g[(g["terrain"] == "flat") & g["success"]]
+        rows.append({"condition": condition, "pipeline": seed, "trial": g["trial"].iloc[0],
+                     "suite": g.loc[g["terrain"] != "flat", "success"].mean(),
+                     "extra": g.loc[g["terrain"] == "extra_blocks", "success"].mean(),
+                     "lift": lift.get((condition, seed), np.nan), "flat_cot": flat["cost_of_transport"].mean()})
+    return pd.DataFrame(rows)
+
+
+if __name__ == "__main__":
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("sweeps", nargs="+", type=Path)
+    ap.add_argument("--validation", action="append", default=[], type=Path)
+    a = ap.parse_args()
+    main(a.sweeps, a.validation)
