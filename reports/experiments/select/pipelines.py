@@ -67,7 +67,7 @@ def main(sweeps: list[Path], validations: list[Path], flat: str = "flat") -> Non
         kept = cands[choose(returns)]
         chosen_records.append({**kept, "condition": BEST, "seed": p})
         single_records.append({**cands[0], "condition": SINGLE, "seed": p})
-        rows.append({"pipeline": p, **{f"return_{c['seed']}": round(r, 1) for c, r in zip(cands, returns)},
+        rows.append({"pipeline": p, **{f"return_p+{i * SEED_STRIDE}": round(r, 1) for i, r in enumerate(returns)},
                      "kept": kept["seed"]})
     print(pd.DataFrame(rows).to_string(index=False))
     episodes = tables.episodes_frame(chosen_records + single_records)
