@@ -29,6 +29,11 @@ def tiny(root: Path, *extra: str) -> Params:
                                               f"ppo.report_dir={root / 'reports'}", *extra])
 
 
+def no_episode(_args):
+    """Stands in for a validation episode where none may run (module level: the worker pool pickles it by name)."""
+    raise AssertionError("a validation episode ran again")
+
+
 def test_candidate_seeds_step_by_a_thousand_and_choice_keeps_the_first_of_equal_returns():
     assert candidate_seeds(7, 3) == [7, 1007, 2007]
     assert candidate_seeds(0, 1) == [0]
@@ -89,9 +94,6 @@ def test_best_of_two_exports_the_higher_validation_return_and_each_candidate_is_
     assert single_scores == chosen["candidates"]["1003"]  # the validation is deterministic
 
     # resuming a finished selection trains nothing and reuses the saved scores (no episode runs)
-    def no_episode(_args):
-        raise AssertionError("a validation episode ran again")
-
     monkeypatch.setattr(selection, "_validation_episode", no_episode)
     again = train_policy(params, resume=True, show_progress=False)
     assert again["finished"] and again["selection/chosen_seed"] == best
