@@ -100,6 +100,12 @@ def test_best_of_two_exports_the_higher_validation_return_and_each_candidate_is_
     assert json.loads((out / "candidates" / f"seed{best}" / VALIDATION).read_text())["scores"]["return"] == \
         returns[best]
 
+    # other weights under the same signature (retrained on another CPU, or pulled): scored again, not read back
+    weights = out / "candidates" / "seed3" / "policy" / "weights.pt"
+    weights.write_bytes(weights.read_bytes() + b"\0")
+    with pytest.raises(AssertionError, match="ran again"):
+        train_policy(params, resume=True, show_progress=False)
+
 
 def test_fewer_candidates_drop_the_folders_of_more(tmp_path):
     train_policy(tiny(tmp_path, "ppo.candidates=2"), show_progress=False)

@@ -14,6 +14,7 @@ training draws its own, so the choice is never made on the episodes the policy i
 
 from __future__ import annotations
 
+import hashlib
 import json
 import shutil
 from collections.abc import Callable
@@ -84,11 +85,14 @@ def validation_episodes(params: Params) -> list[tuple[str, int]]:
 
 def validate(params: Params, policy_dir: Path, signature: str, workers: int) -> dict[str, Any]:
     """Score the policy in `policy_dir` on the validation episodes, in `workers` processes; the scores are saved
-    beside it (VALIDATION) and reused while its training signature and the episodes are the same."""
+    beside it (VALIDATION) and reused while its training signature, its exported weights (a run retrained on another
+    CPU has the same signature, other weights) and the episodes are the same."""
+    from hexpipe.rl.inference import WEIGHTS
     from hexpipe.workers import stop_pool, worker_pool
 
     episodes = validation_episodes(params)
-    key = {"signature": signature, "episodes": [list(e) for e in episodes]}
+    weights = hashlib.sha256((policy_dir / "policy" / WEIGHTS).read_bytes()).hexdigest()[:16]
+    key = {"signature": signature, "weights": weights, "episodes": [list(e) for e in episodes]}
     cached = _read_json(policy_dir / VALIDATION)
     if cached is not None and cached.get("key") == key:
         return cached["scores"]
