@@ -53,7 +53,7 @@ def exposes_stream(host: str) -> bool:
 
 
 def parse_gait(text: str, params: Params) -> Gait:
-    """'a,b,omega' (rad, rad, rad/s) -> a gait inside the CPG bounds, or ConfigError naming the bad value."""
+    """'a,b,omega' (rad, rad, rad/s) -> a gait in (0, cpg.upper], or ConfigError naming the bad value."""
     parts = [p.strip() for p in text.split(",")]
     try:
         values = tuple(float(p) for p in parts)
@@ -61,10 +61,9 @@ def parse_gait(text: str, params: Params) -> Gait:
         values = ()
     if len(values) != 3 or not all(math.isfinite(v) for v in values):
         raise ConfigError(f"--gait {text!r}: expected three numbers a,b,omega (rad, rad, rad/s), e.g. 0.25,0.4,4.71")
-    lower, upper = params.cpg.lower, params.cpg.upper
-    for name, value, lo, hi in zip(("a", "b", "omega"), values, lower, upper, strict=True):
-        if not lo <= value <= hi:
-            raise ConfigError(f"--gait: {name}={value:g} outside the CPG bounds [{lo:g}, {hi:g}] (cpg.lower/upper)")
+    for name, value, hi in zip(("a", "b", "omega"), values, params.cpg.upper, strict=True):
+        if not 0 < value <= hi:  # below cpg.lower is fine: a fixed gait runs with the floors lowered to it
+            raise ConfigError(f"--gait: {name}={value:g} outside the CPG bounds (0, {hi:g}] (cpg.upper)")
     return values  # type: ignore[return-value]
 
 

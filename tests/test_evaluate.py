@@ -10,9 +10,9 @@ import pandas as pd
 import pytest
 from stable_baselines3.common.vec_env import DummyVecEnv
 
-from hexpipe.config import Params, load_params
+from hexpipe.config import ConfigError, Params, load_params
 from hexpipe.envs.hexapod import HexapodEnv
-from hexpipe.evaluation.controllers import ControllerSpec
+from hexpipe.evaluation.controllers import ControllerSpec, grid_gaits
 from hexpipe.evaluation.episodes import TRACE_COLUMNS, EpisodeJob, legs_at_faces, lift_before_and_away, run_episode
 from hexpipe.evaluation.metrics import rank_gaits, stall_counts
 from hexpipe.evaluation.run import GRID_SEEDS, evaluate
@@ -182,12 +182,22 @@ def test_gait_ranking_breaks_ties_by_distance_up_to_the_goal_then_speed():
                                                             ((0.25, 0.40, 1.5 * math.pi), "goal", "")])
 def test_a_low_gait_stops_with_its_front_feet_at_the_face(gait, termination, legs):
     """The physical premise, read by evaluate: b = 0.15 stalls at the block's face, front feet first; b = 0.40
-    crosses, and an episode that arrives names no legs."""
+    crosses, and an episode that arrives names no legs. b = 0.15 lies below the floor cpg.lower: run_episode
+    lowers it for a fixed gait, which holds its b the whole episode."""
     params = load_params(ROOT / "params.yaml")
-    params = params.model_copy(update={"cpg": params.cpg.holding(gait)})  # also under raised floors
     scenario = load_scenarios(["single_block"])[0]
     row = run_episode(params, EpisodeJob(scenario, ControllerSpec("fixed", gait=gait), 0, 1000)).row
     assert (row["termination"], row["stall_legs"]) == (termination, legs)
+    assert row["b_mean"] == pytest.approx(gait[1])
+
+
+def test_grid_gaits_may_lie_below_the_floors_but_not_above_the_ceiling():
+    params = load_params(ROOT / "params.yaml", ["cpg.lower=[0.25,0.2,3.141593]"])
+    assert grid_gaits(params.model_copy(update={"eval": params.eval.model_copy(update={"grid_a": (0.2, 0.4)})}))
+    for key, values in (("grid_a", (0.2, 0.45)), ("grid_b", (0.6,))):
+        bad = params.model_copy(update={"eval": params.eval.model_copy(update={key: values})})
+        with pytest.raises(ConfigError, match=rf"eval.{key}: \[{values[-1]}\] outside the CPG bounds"):
+            grid_gaits(bad)
 
 
 def test_legs_at_faces_names_the_legs_a_face_stops():

@@ -103,6 +103,9 @@ def test_gait_parsing_and_controller_choice():
     assert parse_gait(" 0.25, 0.4 ,4.71", params) == (0.25, 0.4, 4.71)
     with pytest.raises(ConfigError, match="omega=9 outside"):
         parse_gait("0.25,0.4,9", params)
+    assert parse_gait("0.05,0.1,1.6", params) == (0.05, 0.1, 1.6)  # below the floors: the paper's gaits may be watched
+    with pytest.raises(ConfigError, match="a=0 outside"):
+        parse_gait("0,0.4,4.71", params)
     assert controller_spec(params, None, None, "0.25,0.4,4.71").gait == (0.25, 0.4, 4.71)
     assert controller_spec(params, None, "d", None) == ControllerSpec("blind", "d", expect_blind=True)
 

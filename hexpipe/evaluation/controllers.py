@@ -103,15 +103,17 @@ def learned_controllers(params: Params) -> tuple[list[ControllerSpec], dict[str,
 
 
 def grid_gaits(params: Params) -> list[Gait]:
-    """Every (a, b, omega) of the grid; ConfigError if a value lies outside the CPG bounds or an axis is empty."""
+    """Every (a, b, omega) of the grid; ConfigError if a value is not positive, lies above cpg.upper, or an axis is
+    empty. Values below cpg.lower are fine: a fixed gait runs with the floors lowered to it (`run_episode`)."""
     cfg, cpg = params.eval, params.cpg
     axes = {"grid_a": cfg.grid_a, "grid_b": cfg.grid_b, "grid_omega": cfg.grid_omega}
     for i, (key, values) in enumerate(axes.items()):
         if not values:
             raise ConfigError(f"eval.{key} is empty; the best_fixed baseline needs at least one value")
-        bad = [v for v in values if not cpg.lower[i] <= v <= cpg.upper[i]]
+        bad = [v for v in values if not 0 < v <= cpg.upper[i]]
         if bad:
-            raise ConfigError(f"eval.{key}: {bad} outside the CPG bounds [{cpg.lower[i]}, {cpg.upper[i]}]")
+            raise ConfigError(f"eval.{key}: {bad} outside the CPG bounds (0, {cpg.upper[i]}] (cpg.upper; a fixed "
+                              "gait may lie below cpg.lower)")
     return [(float(a), float(b), float(w)) for a, b, w in itertools.product(*axes.values())]
 
 

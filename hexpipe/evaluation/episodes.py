@@ -124,6 +124,8 @@ def run_episode(params: Params, job: EpisodeJob, on_step: StepHook | None = None
 
         torch.set_num_threads(1)  # one core per worker
     start = time.perf_counter()
+    if job.controller.gait is not None:  # the floors bound what a policy may choose, not a gait it is compared with
+        params = params.model_copy(update={"cpg": params.cpg.holding(job.controller.gait)})
     controller = build(job.controller, params)
     env = HexapodEnv.from_params(
         params, job.scenario.recipe, obs_sensors=controller.sensors, initial_cpg=controller.initial_cpg,
