@@ -96,9 +96,10 @@ class CpgConfig(_Section):
     """
 
     initial: Triple = (0.25, 0.2, 1.5 * math.pi)
-    # floors b >= 0.2 rad and omega >= pi rad/s (the paper's bounds: 0.05, pi/2): policies that failed sat on them,
-    # dragging their feet or crawling (reports/experiments, "floors"); `holding` lowers them for a fixed gait
-    lower: Triple = (0.05, 0.2, math.pi)
+    # floors a >= 0.25 rad, b >= 0.2 rad and omega >= pi rad/s (the paper's bounds: 0.05, 0.05, pi/2): policies that
+    # failed sat on them, dragging their feet, crawling (reports/experiments, "floors") or, on rough ground, marching
+    # in place with a at 0.05 ("floor25"); `holding` lowers them for a fixed gait
+    lower: Triple = (0.25, 0.2, math.pi)
     # omega <= 2 pi (a 1 Hz stride): above it the rate-limited shoulder cannot reach the lift b asks for, and a
     # 100k-step policy that pins omega at 3 pi crossed the training block in only 75% of episodes
     upper: Triple = (0.40, 0.50, 2.0 * math.pi)
