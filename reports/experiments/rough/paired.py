@@ -53,7 +53,7 @@ def main(sweeps: list[Path], treated: str, control: str, flat: str = "flat") -> 
         mine = judged[judged["condition"] == condition]
         print(f"{condition}: {int(mine['met'].sum())} of {len(mine)} targets met")
 
-    paired = outcome.pivot(index="pipeline", columns="condition")
+    paired = outcome.drop(columns="trial").pivot(index="pipeline", columns="condition")
     print()
     for column in ("rough", "suite", "lift", "extra", "flat_cot"):
         diff = (paired[column][treated] - paired[column][control]).to_numpy(float)
