@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "select"))
-from pipelines import load_records, outcomes  # the experiment script beside this one
+from pipelines import load_records, outcomes, print_targets  # the experiment script beside this one
 
 from hexpipe.sweep import tables
 
@@ -44,16 +44,9 @@ def main(sweeps: list[Path], treated: str, control: str, flat: str = "flat") -> 
     print(f"seeds {seeds}: {treated} against {control}")
     print(outcome.rename(columns={"pipeline": "seed"}).round(3).to_string(index=False))
 
-    judged = tables.judge_targets(tables.target_parts(episodes, [treated, control], flat), [treated, control], flat)
-    print("\nissue 10's targets over seeds (mean over seeds, 95% bootstrap over seeds; worst terrain):")
-    for row in judged.itertuples():
-        print(f"{row.condition:>8} {row.target:<24} {row.terrain:<13} {row.value:+.3f} [{row.low:+.3f}, "
-              f"{row.high:+.3f}] {'met' if row.met else 'missed'} ({row.seeds} seeds)")
-    for condition in (treated, control):
-        mine = judged[judged["condition"] == condition]
-        print(f"{condition}: {int(mine['met'].sum())} of {len(mine)} targets met")
+    print_targets(episodes, [treated, control], flat, "seeds", width=8)
 
-    paired = outcome.pivot(index="pipeline", columns="condition")
+    paired = outcome.drop(columns="trial").pivot(index="pipeline", columns="condition")
     print()
     for column in ("rough", "suite", "lift", "extra", "flat_cot"):
         diff = (paired[column][treated] - paired[column][control]).to_numpy(float)

@@ -74,20 +74,24 @@ def main(sweeps: list[Path], validations: list[Path], flat: str = "flat") -> Non
     outcome = outcomes(episodes)
     print("\nper pipeline (policy, sweep-scale evaluation): suite = success on every terrain but flat ground")
     print(outcome.round(3).to_string())
-    parts = tables.target_parts(episodes, [BEST, SINGLE], flat)
-    judged = tables.judge_targets(parts, [BEST, SINGLE], flat)
-    print("\nissue 10's targets over pipelines (mean over pipelines, 95% bootstrap over pipelines; worst terrain):")
-    for row in judged.itertuples():
-        print(f"{row.condition:>7} {row.target:<24} {row.terrain:<13} {row.value:+.3f} [{row.low:+.3f}, "
-              f"{row.high:+.3f}] {'met' if row.met else 'missed'} ({row.seeds} pipelines)")
-    for condition in (BEST, SINGLE):
-        mine = judged[judged["condition"] == condition]
-        print(f"{condition}: {int(mine['met'].sum())} of {len(mine)} targets met")
+    print_targets(episodes, [BEST, SINGLE], flat, "pipelines", width=7)
     paired = outcome.pivot(index="pipeline", columns="condition")
     for column in ("lift", "suite", "extra"):
         diff = (paired[column][BEST] - paired[column][SINGLE]).to_numpy(float)
         print(f"best3 - single, {column}: mean {diff.mean():+.3f} over {len(diff)} pipelines "
               f"(changed in {(np.abs(diff) > 1e-9).sum()}; per pipeline {np.round(diff, 3).tolist()})")
+
+
+def print_targets(episodes: pd.DataFrame, conditions: list[str], flat: str, unit: str, width: int) -> None:
+    """Issue 10's targets for each condition over its trials (`unit`: what a trial is called), and the count met."""
+    judged = tables.judge_targets(tables.target_parts(episodes, conditions, flat), conditions, flat)
+    print(f"\nissue 10's targets over {unit} (mean over {unit}, 95% bootstrap over {unit}; worst terrain):")
+    for row in judged.itertuples():
+        print(f"{row.condition:>{width}} {row.target:<24} {row.terrain:<13} {row.value:+.3f} [{row.low:+.3f}, "
+              f"{row.high:+.3f}] {'met' if row.met else 'missed'} ({row.seeds} {unit})")
+    for condition in conditions:
+        mine = judged[judged["condition"] == condition]
+        print(f"{condition}: {int(mine['met'].sum())} of {len(mine)} targets met")
 
 
 def outcomes(episodes: pd.DataFrame) -> pd.DataFrame:
