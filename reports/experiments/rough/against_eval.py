@@ -15,6 +15,8 @@ import pandas as pd
 
 
 def main(csvs: list[Path], results: Path) -> None:
+    if missing := [str(p) for p in (results, *csvs) if not p.is_file()]:
+        raise SystemExit(f"error: no such file: {', '.join(missing)}")
     evaluated = pd.read_csv(results)
     evaluated = evaluated[evaluated["controller"] == "policy"]
     for csv in csvs:

@@ -31,6 +31,7 @@ from hexpipe.config import ConfigError, load_params
 from hexpipe.evaluation.controllers import ControllerSpec
 from hexpipe.evaluation.episodes import TRACE_COLUMNS, EpisodeJob, run_episode
 from hexpipe.evaluation.suite import load_scenarios
+from hexpipe.sim.terrain import TerrainError
 
 A_LOW = 0.3  # rad: successes average a = 0.38, failures 0.29-0.31 (every sweep on this recipe)
 
@@ -68,8 +69,11 @@ def main() -> None:
     a = ap.parse_args()
     try:
         params = load_params("params.yaml", overrides=a.overrides)  # a bad key or value: one line, not a traceback
-    except ConfigError as exc:
+        load_scenarios([a.terrain])
+    except (ConfigError, TerrainError) as exc:
         raise SystemExit(f"error: {exc}") from None
+    if not (Path(a.policy) / "policy.json").is_file():
+        raise SystemExit(f"error: no trained policy at {a.policy} (policy.json missing); pass --policy DIR")
     jobs = [(a.policy, a.terrain, i, params.eval.seed + i, tuple(a.overrides)) for i in range(a.episodes)]
     with ProcessPoolExecutor(a.workers) as pool:
         frame = pd.DataFrame(list(pool.map(_one, jobs)))
