@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from hexpipe.atomic import write_text
 from hexpipe.config import ConfigError, load_params
 from hexpipe.evaluation.controllers import ControllerSpec
 from hexpipe.evaluation.episodes import TRACE_COLUMNS, EpisodeJob, run_episode
@@ -77,10 +78,7 @@ def main() -> None:
     jobs = [(a.policy, a.terrain, i, params.eval.seed + i, tuple(a.overrides)) for i in range(a.episodes)]
     with ProcessPoolExecutor(a.workers) as pool:
         frame = pd.DataFrame(list(pool.map(_one, jobs)))
-    out = Path(a.out)
-    tmp = out.with_suffix(".tmp")
-    frame.to_csv(tmp, index=False)
-    tmp.replace(out)
+    out = write_text(a.out, frame.to_csv(index=False))  # the project's atomic write: a whole file or none
     with pd.option_context("display.width", 200):
         print(frame.to_string(index=False))
         print(f"\nsuccess {frame.success.mean():.2f} over {len(frame)}; by outcome:")
