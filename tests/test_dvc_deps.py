@@ -76,3 +76,19 @@ def test_every_module_a_stage_runs_is_a_dep(stage: str) -> None:
     assert Path("hexpipe/sim/terrain/model.py") in code or stage == "train-vae"  # the walk reaches sub-packages
     missing = sorted(str(p) for p in code if not any(p == d or d in p.parents for d in deps))
     assert not missing, f"dvc.yaml stage {stage} runs these modules but does not list them: {missing}"
+
+
+def test_an_interrupted_repro_keeps_every_report_file() -> None:
+    """`dvc repro` deletes a stage's outputs before running it unless they persist: a report file (git-tracked,
+    `cache: false`, written atomically by its stage) must persist, so that a stage stopped half-way leaves the
+    last report, not none. Folders (dvclive's plots, written row by row) and the cached data folders are exempt."""
+    files = []
+    for name, stage in STAGES.items():
+        for kind in ("outs", "metrics", "plots"):
+            for entry in stage.get(kind, []):
+                path, flags = next(iter(entry.items())) if isinstance(entry, dict) else (entry, {})
+                if flags.get("cache") is False and Path(path).suffix:
+                    files.append((name, path, flags.get("persist", False)))
+    assert len(files) >= 12, files  # every stage's metrics, speed and the evaluation's tables, report and summary
+    missing = [f"{stage}: {path}" for stage, path, persist in files if not persist]
+    assert not missing, f"report files a stopped repro would delete (add persist: true): {missing}"
