@@ -3,12 +3,18 @@ and evaluated as sweep trials, the one train-ppo keeps (the highest mean validat
 run a pipeline without selection trains (candidate p), judged on issue 10's targets over pipelines.
 
     .venv/bin/python reports/experiments/select/pipelines.py reports/sweeps/epyc30 reports/sweeps/cand ... \
-        [--validation reports/experiments/select/select30_validation.csv ...]
+        [--validation reports/experiments/select/select30_validation.csv ...] [--repro reports]
 
 A trial's validation return is the `selection.json` its sweep record carries (trials run since ppo.candidates,
 which train-ppo scores itself), or else the mean `env_return` of its episodes in a validate.py CSV (the same
 60 episodes and the same sum: validate.py and hexpipe/rl/selection.py agree to the last digit on seed 0's first
 four). Trials are matched by their data folder, data/sweeps/NAME/TRIAL.
+
+--repro REPORTS adds `make repro`'s own pipeline: the candidates' returns from REPORTS/ppo/selection.json, and the
+kept policy's first --episodes (10) evaluation episodes per terrain from REPORTS/eval/results.csv, which are the
+sweep trials' episodes (the same seeds from eval.seed, deterministic), for the policy, the open-loop gait and the
+best fixed gait (the same a=0.4, b=0.4, omega=pi when the repro's 27-gait grid picks it: the script says which it
+picked). Without selection the pipeline is its first candidate alone, known only where that is the one kept.
 """
 
 from __future__ import annotations
@@ -24,6 +30,7 @@ from hexpipe.rl.selection import SEED_STRIDE, candidate_seeds, choose
 from hexpipe.sweep import tables
 
 CANDIDATES = 3
+REPRO_CONTROLLERS = ("policy", "best_fixed", "open_loop")  # the controllers a sweep trial evaluates
 SINGLE, BEST = "single", "best3"
 
 
@@ -47,7 +54,23 @@ def validation_return(record: dict, csv: pd.Series) -> float:
     return float("nan")
 
 
-def main(sweeps: list[Path], validations: list[Path], flat: str = "flat") -> None:
+def repro_pipeline(reports: Path, episodes: int) -> tuple[int, list[float], dict]:
+    """`make repro`'s pipeline seed, its candidates' validation returns, and its kept policy as a trial record."""
+    selection = json.loads((reports / "ppo" / "selection.json").read_text())
+    seeds = sorted(int(s) for s in selection["candidates"])
+    returns = [float(selection["candidates"][str(s)]["return"]) for s in seeds]
+    rows = pd.read_csv(reports / "eval" / "results.csv")
+    rows = rows[rows["controller"].isin(REPRO_CONTROLLERS) & (rows["episode"] < episodes)]
+    gait = rows.loc[rows["controller"] == "best_fixed", "gait"].dropna().unique().tolist()
+    print(f"make repro ({reports}): seeds {seeds}, kept {selection['chosen_seed']}; its best fixed gait {gait}; "
+          f"first {episodes} episodes a terrain")
+    record = {"seed": int(selection["chosen_seed"]), "trial": "make-repro", "data": str(reports),
+              "episodes": rows.drop(columns=["gait"]).to_dict("records")}
+    return seeds[0], returns, record
+
+
+def main(sweeps: list[Path], validations: list[Path], flat: str = "flat", repro: Path | None = None,
+         repro_episodes: int = 10) -> None:
     csv = (pd.concat([pd.read_csv(v) for v in validations]).groupby("trial")["env_return"].mean()
            if validations else pd.Series(dtype=float))
     records = load_records(sweeps)
@@ -67,6 +90,18 @@ def main(sweeps: list[Path], validations: list[Path], flat: str = "flat") -> Non
         kept = cands[choose(returns)]
         chosen_records.append({**kept, "condition": BEST, "seed": p})
         single_records.append({**cands[0], "condition": SINGLE, "seed": p})
+        rows.append({"pipeline": p, **{f"return_p+{i * SEED_STRIDE}": round(r, 1) for i, r in enumerate(returns)},
+                     "kept": kept["seed"]})
+    if repro is not None:
+        p, returns, kept = repro_pipeline(repro, repro_episodes)
+        if p in pipelines:
+            raise SystemExit(f"error: pipeline {p} is both in the sweeps and --repro {repro}")
+        chosen_records.append({**kept, "condition": BEST, "seed": p})
+        if kept["seed"] == p:
+            single_records.append({**kept, "condition": SINGLE, "seed": p})
+        else:
+            print(f"pipeline {p} (make repro): kept {kept['seed']}, and seed {p} alone was not evaluated; "
+                  "its single run is left out")
         rows.append({"pipeline": p, **{f"return_p+{i * SEED_STRIDE}": round(r, 1) for i, r in enumerate(returns)},
                      "kept": kept["seed"]})
     print(pd.DataFrame(rows).to_string(index=False))
@@ -111,5 +146,7 @@ if __name__ == "__main__":
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("sweeps", nargs="+", type=Path)
     ap.add_argument("--validation", action="append", default=[], type=Path)
+    ap.add_argument("--repro", type=Path, help="a reports folder of `make repro` to add as a pipeline")
+    ap.add_argument("--episodes", type=int, default=10, help="--repro's episodes a terrain (the sweeps' eval.episodes)")
     a = ap.parse_args()
-    main(a.sweeps, a.validation)
+    main(a.sweeps, a.validation, repro=a.repro, repro_episodes=a.episodes)
