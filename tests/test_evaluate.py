@@ -139,6 +139,10 @@ def test_a_retrained_encoder_with_another_latent_size_is_refused(seeing, tmp_pat
     moved.mkdir()
     (moved / "policy").symlink_to(Path(seeing.eval.policy_dir) / "policy")
     (moved / "policy.json").write_text(json.dumps({**config, "encoder_dir": str(tmp_path / "vae4")}))
+    with pytest.raises(PolicyError, match=r"not the one the policy was trained with \(expected fingerprint "):
+        load_policy(moved, seeing)  # its training signature names the encoder it was trained with
+    unsigned = {k: v for k, v in config.items() if k != "signature"}  # a policy.json without one: the size check
+    (moved / "policy.json").write_text(json.dumps({**unsigned, "encoder_dir": str(tmp_path / "vae4")}))
     with pytest.raises(PolicyError, match=r"expected a heightmap encoder with latent_dim=8.*found heightmap with "
                                           r"latent_dim=4"):
         load_policy(moved, seeing)
