@@ -56,6 +56,9 @@ def validation_return(record: dict, csv: pd.Series) -> float:
 
 def repro_pipeline(reports: Path, episodes: int) -> tuple[int, list[float], dict]:
     """`make repro`'s pipeline seed, its candidates' validation returns, and its kept policy as a trial record."""
+    for path in (reports / "ppo" / "selection.json", reports / "eval" / "results.csv"):
+        if not path.is_file():
+            raise SystemExit(f"error: --repro {reports}: {path} not found (a make repro reports folder holds it)")
     selection = json.loads((reports / "ppo" / "selection.json").read_text())
     seeds = sorted(int(s) for s in selection["candidates"])
     returns = [float(selection["candidates"][str(s)]["return"]) for s in seeds]
