@@ -18,14 +18,18 @@ reports/eval/results.csv) and prints:
 4. `second_face`: per extra_blocks episode, the mean stance plane above the gap's floor while the front feet are
    in the 0.3 m before the second face (x 1.7-2.0 m, the front feet 0.45 m ahead of the base), raw and low-passed
    (0.5 s), so what the map reads the 0.10 m second block as, and the mean b there.
+5. with `--sweep DIR` (e.g. reports/sweeps/floorpipe): per trial, the failures on block_near and extra_blocks from
+   its evaluation results: b_max (the highest b of the episode) and the distance where it ended.
 """
 
 from __future__ import annotations
 
 import argparse
 import math
+from pathlib import Path
 
 import numpy as np
+import pandas as pd
 
 from hexpipe.config import Params, load_params
 from hexpipe.envs.hexapod import HexapodEnv
@@ -138,10 +142,22 @@ def second_face(policy: LoadedPolicy, params: Params, episodes: int) -> None:
               f"the 0.10 m block reads {0.1 - raw:.3f} m ({0.1 - smooth:.3f}); mean b {ep['b'][near].mean():.3f}")
 
 
+def sweep_failures(sweep: Path) -> None:
+    print(f"5. failures in {sweep}: b_max and end distance (m) per failed episode")
+    for results in sorted(sweep.glob("*/eval/results.csv")):
+        rows = pd.read_csv(results)
+        rows = rows[(rows.controller == "policy") & ~rows.success]
+        for terrain in ("block_near", "extra_blocks"):
+            failed = rows[rows.terrain == terrain]
+            print(f"  {results.parts[-3]:18s} {terrain:12s} {len(failed):2d} failed; b_max "
+                  f"{failed.b_max.round(2).tolist()}; ended at {failed.distance.round(2).tolist()}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--policy", default="data/models/ppo")
     ap.add_argument("--episodes", type=int, default=4)
+    ap.add_argument("--sweep", type=Path, help="also list a sweep's block_near and extra_blocks failures")
     args = ap.parse_args()
     params = load_params("params.yaml")
     policy = load_policy(args.policy, params)
@@ -149,6 +165,8 @@ def main() -> None:
     bob(policy, params, args.episodes)
     stall(policy, params)
     second_face(policy, params, 2 * args.episodes)
+    if args.sweep is not None:
+        sweep_failures(args.sweep)
 
 
 if __name__ == "__main__":
