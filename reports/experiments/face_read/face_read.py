@@ -31,10 +31,10 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from hexpipe.config import Params, load_params
+from hexpipe.config import ConfigError, Params, load_params
 from hexpipe.envs.hexapod import HexapodEnv
 from hexpipe.evaluation.suite import load_scenarios
-from hexpipe.rl.policy import LoadedPolicy, load_policy
+from hexpipe.rl.policy import LoadedPolicy, PolicyError, load_policy
 
 FRONT_REACH = 0.45  # m ahead of the base (hexpipe/evaluation/episodes.py)
 FACE_BAND = (0.45, 0.75)  # m ahead of the base: a face the front feet stand at
@@ -159,8 +159,15 @@ def main() -> None:
     ap.add_argument("--episodes", type=int, default=4)
     ap.add_argument("--sweep", type=Path, help="also list a sweep's block_near and extra_blocks failures")
     args = ap.parse_args()
-    params = load_params("params.yaml")
-    policy = load_policy(args.policy, params)
+    if args.sweep is not None and not any(args.sweep.glob("*/eval/results.csv")):
+        raise SystemExit(f"error: no trial results (*/eval/results.csv) under {args.sweep}; pass a sweep's reports")
+    try:  # a bad params.yaml or policy folder: one line, not a traceback
+        params = load_params("params.yaml")
+        policy = load_policy(args.policy, params)
+    except (ConfigError, PolicyError) as exc:
+        raise SystemExit(f"error: {exc}") from None
+    if policy.encoder is None:
+        raise SystemExit(f"error: {args.policy} is a blind policy; this reads what its terrain encoder sees")
     offset(policy, params)
     bob(policy, params, args.episodes)
     stall(policy, params)
