@@ -327,6 +327,9 @@ class PpoConfig(_Section):
     # [start, end] fractions of total_timesteps over which task.lift_cost rises from 0 to its value (null: the
     # whole price from the first step): learn to cross with the lift free, then be charged for it where not needed
     lift_cost_ramp: tuple[Fraction, Fraction] | None = (0.25, 0.75)
+    # drops per second of the lift b to its floor in training only (hexpipe/rl/perturbations.py; 0: none): puts the
+    # policy where the default fails, a face at the feet with b low, more often than its own episodes do
+    lift_drop_rate: Annotated[float, Field(ge=0, le=20)] = 0.0
     # best of K (hexpipe/rl/selection.py): train seeds seed, seed + 1000, ... and keep the one with the highest mean
     # return on validation_episodes held-out episodes of train_terrains (issue 10, select30: the draw decides whether
     # a policy lifts, and the task's return ranks the draws that lift higher). 1: one run, still validated

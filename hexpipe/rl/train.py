@@ -33,6 +33,7 @@ from hexpipe.rl.checkpoint import (
 from hexpipe.rl.curriculum import Curriculum, CurriculumStats
 from hexpipe.rl.features import Encoder, TerrainEmbedding, TerrainFeatures
 from hexpipe.rl.inference import export_weights
+from hexpipe.rl.perturbations import LiftDrops
 from hexpipe.rl.rollout import RolloutPolicy
 from hexpipe.speed import SPEED_JSON, machine, move_speed
 from hexpipe.workers import die_with_parent
@@ -45,7 +46,8 @@ SELECTION_ONLY = ("candidates", "validation_episodes")  # ppo keys that choose a
 def env_factory(params: Params, terrain: str, encoder: Encoder | None, randomize: bool) -> Callable[[], gym.Env]:
     """A picklable constructor for one environment (SubprocVecEnv builds it in the worker): it observes the
     encoder's sensor and embeds it there (`TerrainEmbedding`); with ppo.curriculum it keeps its own difficulty level
-    (hexpipe/rl/curriculum.py); with ppo.privileged_critic it adds the critic's privileged vector."""
+    (hexpipe/rl/curriculum.py); with ppo.lift_drop_rate its lift is knocked to the floor at random moments
+    (hexpipe/rl/perturbations.py); with ppo.privileged_critic it adds the critic's privileged vector."""
     parent = os.getpid()
     sensors = () if encoder is None else (encoder.modality,)
 
@@ -55,6 +57,8 @@ def env_factory(params: Params, terrain: str, encoder: Encoder | None, randomize
                                               privileged=params.ppo.privileged_critic)
         if params.ppo.curriculum:
             env = Curriculum(env, goal=params.task.goal_distance)
+        if params.ppo.lift_drop_rate > 0:
+            env = LiftDrops(env, params.ppo.lift_drop_rate)
         if encoder is None:
             return env
         import torch

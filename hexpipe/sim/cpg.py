@@ -129,6 +129,12 @@ class CPG:
             z = np.asarray(z, dtype=float)
             self.w = z[:, 0] + 1j * z[:, 1]
 
+    def drop_lift(self) -> None:
+        """Set the lift b to its floor (`cfg.lower`) and stop its rate: a training perturbation
+        (`hexpipe.rl.perturbations`). The legs follow the new b from the next substep; a and omega are untouched."""
+        self.params[1] = self.cfg.lower[1]
+        self.rates[1] = 0.0
+
     def advance(self, command: np.ndarray, dt: float, n: int, lift_floor: np.ndarray | None = None) -> np.ndarray:
         """Advance n substeps of dt (s) under a constant `command` (the parameters' second derivative, or their rate
         with cfg.action_order 1); returns (n, 6, 2) joint-space (x, y) (rad).
