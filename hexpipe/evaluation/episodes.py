@@ -23,8 +23,9 @@ StepHook = Callable[[HexapodEnv, float, dict[str, Any], bool], None]
 TRACE_COLUMNS = ("time", "distance", "a", "b", "omega")  # s, m, rad, rad, rad/s
 # The lift statistics, by the body's forward distance (m from the start). "Before the face": the last BEFORE_FACE
 # before a block's start, where an adaptive gait must be lifting (issue 10's adaptation measure). "Open ground":
-# farther than NEAR_BEFORE before any block (the front feet reach about 0.45 m ahead of the base and a policy may
-# start lifting early) and NEAR_AFTER past its end (the rear legs are still on it).
+# farther than NEAR_BEFORE before any block (the front feet reach about FRONT_REACH ahead of the base and a policy
+# may start lifting early) and NEAR_AFTER past its end (the rear legs are still on it).
+FRONT_REACH = 0.45  # m ahead of the base: where the front feet are (the diagnosis scripts place a face by it)
 BEFORE_FACE = 0.3
 NEAR_BEFORE, NEAR_AFTER = 1.0, 0.5
 # A foot "at a face" when an episode ends stuck or fallen: its centre at most FOOT_BEFORE_FACE before a block's face

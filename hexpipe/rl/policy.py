@@ -24,7 +24,7 @@ from hexpipe import sensors as registry
 from hexpipe.config import CpgConfig, Params, SensorConfig, SimConfig
 from hexpipe.rl.features import PROPRIOCEPTIVE_KEYS, Encoder, feature_vector
 from hexpipe.rl.inference import WEIGHTS, WEIGHTS_CONFIG, ObservationNormaliser, load_weights
-from hexpipe.rl.train import POLICY_CONFIG, encoder_fingerprint
+from hexpipe.rl.train import POLICY_CONFIG, encoder_fingerprint, signature_encoder
 from hexpipe.validation import one_line
 
 POLICY_SUBDIR = "policy"  # train.py saves the policy files here
@@ -203,7 +203,7 @@ def _load_matching_encoder(directory: Path, config: dict[str, Any], params: Para
         encoder = load_encoder(encoder_dir, rise_readout=bool(config.get("rise_readout", False)))
     except EncoderError as exc:
         raise PolicyError(f"{directory}: the policy's terrain encoder at {encoder_dir} is unusable: {exc}") from None
-    trained_with = str(config.get("signature", "")).partition("-")[2]  # the encoder's fingerprint at training time
+    trained_with = signature_encoder(str(config.get("signature", "")))  # the encoder's fingerprint at training time
     if trained_with and (found := encoder_fingerprint(encoder_dir)) != trained_with:
         raise PolicyError(
             f"{directory}: the terrain encoder at {encoder_dir} is not the one the policy was trained with "

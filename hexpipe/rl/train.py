@@ -166,6 +166,11 @@ def training_signature(params: Params, encoder_dir: str | Path | None = None) ->
     return base if encoder_dir is None else f"{base}-{encoder_fingerprint(encoder_dir)}"
 
 
+def signature_encoder(signature: str) -> str:
+    """The encoder fingerprint a `training_signature` ends with; '' for a blind policy's (or a missing) one."""
+    return signature.partition("-")[2]
+
+
 def prepare_checkpoints(checkpoints: Path, signature: str, resume: bool, budget: int) -> list[Path]:
     """The checkpoints `--resume` may continue from, newest first: made under the same signature and at or below
     `budget` timesteps (the steps a run of ppo.total_timesteps ends at, a whole number of rollouts).

@@ -33,10 +33,10 @@ import pandas as pd
 
 from hexpipe.config import ConfigError, Params, load_params
 from hexpipe.envs.hexapod import HexapodEnv
+from hexpipe.evaluation.episodes import FRONT_REACH
 from hexpipe.evaluation.suite import load_scenarios
 from hexpipe.rl.policy import LoadedPolicy, PolicyError, load_policy
 
-FRONT_REACH = 0.45  # m ahead of the base (hexpipe/evaluation/episodes.py)
 FACE_BAND = (0.45, 0.75)  # m ahead of the base: a face the front feet stand at
 TAUS = (0.25, 0.5)  # s
 

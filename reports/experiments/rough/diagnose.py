@@ -33,12 +33,11 @@ import pandas as pd
 from hexpipe.atomic import write_text
 from hexpipe.config import ConfigError, load_params
 from hexpipe.evaluation.controllers import ControllerSpec
-from hexpipe.evaluation.episodes import BEFORE_FACE, TRACE_COLUMNS, EpisodeJob, run_episode
+from hexpipe.evaluation.episodes import BEFORE_FACE, FRONT_REACH, TRACE_COLUMNS, EpisodeJob, run_episode
 from hexpipe.evaluation.suite import load_scenarios
 from hexpipe.sim.terrain import TerrainError
 
 A_LOW = 0.3  # rad: successes average a = 0.38, failures 0.29-0.31 (every sweep on this recipe)
-FRONT_REACH = 0.45  # m: how far the front feet reach ahead of the base (hexpipe/evaluation/episodes.py)
 
 
 def _front_lift(col: dict[str, np.ndarray], face: float) -> float:
