@@ -21,6 +21,10 @@ def main() -> None:
     print("trial              suite-flat extra near   lift  | flat: CoT  time  best   a    b   omega")
     for path in files:
         rows = pd.read_csv(path)
+        missing = {"controller", "terrain", "success"} - set(rows.columns)
+        terrains = {"flat", "single_block", "extra_blocks", "block_near"} - set(rows.get("terrain", ()))
+        if missing or terrains:
+            sys.exit(f"{path}: not an evaluate results.csv of the suite (missing {sorted(missing | terrains)})")
         policy = rows[rows.controller == "policy"]
         success = policy.groupby("terrain").success.mean()
         single = policy[policy.terrain == "single_block"]
