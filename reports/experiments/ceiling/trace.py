@@ -1,0 +1,56 @@
+"""One evaluate episode of a policy, every 0.25 s: where the base is and what the CPG does as it stalls.
+
+    .venv/bin/python reports/experiments/ceiling/trace.py POLICY_DIR TERRAIN EPISODE [--from X]
+
+Columns: time (s), base distance from the start (m), base height above the terrain under it (m), pitch (rad,
+positive nose-down), forward velocity (m/s), a, b, omega, b's rate (rad/s) and the step's reward. The episode is
+evaluate's (seed eval.seed + EPISODE), deterministic; rows start where the base passes --from (m).
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from hexpipe.config import ConfigError, load_params
+from hexpipe.envs.hexapod import quat_to_roll_pitch
+from hexpipe.evaluation.controllers import ControllerSpec
+from hexpipe.evaluation.episodes import EpisodeJob, run_episode
+from hexpipe.evaluation.suite import load_scenarios
+from hexpipe.sim.terrain import TerrainError
+
+EVERY = 5  # control steps between rows (0.25 s at 20 Hz)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("policy")
+    ap.add_argument("terrain")
+    ap.add_argument("episode", type=int)
+    ap.add_argument("--from", dest="start", type=float, default=0.0)
+    a = ap.parse_args()
+    try:
+        params = load_params("params.yaml")
+        scenario = load_scenarios([a.terrain])[0]
+    except (ConfigError, TerrainError) as exc:
+        raise SystemExit(f"error: {exc}") from None
+    rows: list[tuple[float, ...]] = []
+
+    def record(env, reward, info, ended) -> None:
+        pos, quat, lin, _ = env.robot.base_state()
+        below = float(env.terrain.height_at(pos[:1], pos[1:2])[0])
+        pitch = quat_to_roll_pitch(quat)[1]
+        rows.append((env.steps * env.control_dt, pos[0] - env.start_xy[0], pos[2] - below, pitch, lin[0],
+                     *env.cpg.params, env.cpg.rates[1], reward))
+
+    job = EpisodeJob(scenario, ControllerSpec("policy", a.policy), a.episode, params.eval.seed + a.episode)
+    row = run_episode(params, job, on_step=record).row
+    print(f"{a.terrain} episode {a.episode}: {row['termination']} at {row['distance']:.2f} m after {row['time']} s, "
+          f"stall legs {row['stall_legs']}")
+    print("    t      x  height  pitch     vx      a      b  omega  b_rate  reward")
+    for values in rows[::EVERY]:
+        if values[1] >= a.start:
+            print(" ".join(f"{v:6.2f}" for v in values))
+
+
+if __name__ == "__main__":
+    main()
