@@ -1,10 +1,11 @@
 """One evaluate episode of a policy, every 0.25 s: where the base is and what the CPG does as it stalls.
 
-    .venv/bin/python reports/experiments/ceiling/trace.py POLICY_DIR TERRAIN EPISODE [--from X]
+    .venv/bin/python reports/experiments/ceiling/trace.py POLICY_DIR TERRAIN EPISODE [--from X] [--set k=v ...]
 
 Columns: time (s), base distance from the start (m), base height above the terrain under it (m), pitch (rad,
 positive nose-down), forward velocity (m/s), a, b, omega, b's rate (rad/s) and the step's reward. The episode is
-evaluate's (seed eval.seed + EPISODE), deterministic; rows start where the base passes --from (m).
+evaluate's (seed eval.seed + EPISODE), deterministic; rows start where the base passes --from (m). Pass the
+policy's own training overrides with --set (a `ceil60` policy needs `--set "cpg.upper=[0.4,0.6,6.283185]"`).
 """
 
 from __future__ import annotations
@@ -27,9 +28,10 @@ def main() -> None:
     ap.add_argument("terrain")
     ap.add_argument("episode", type=int)
     ap.add_argument("--from", dest="start", type=float, default=0.0)
+    ap.add_argument("--set", dest="overrides", action="append", default=[], metavar="SECTION.KEY=VALUE")
     a = ap.parse_args()
     try:
-        params = load_params("params.yaml")
+        params = load_params("params.yaml", overrides=a.overrides)
         scenario = load_scenarios([a.terrain])[0]
     except (ConfigError, TerrainError) as exc:
         raise SystemExit(f"error: {exc}") from None
