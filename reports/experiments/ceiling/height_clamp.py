@@ -21,6 +21,7 @@ from hexpipe.envs import hexapod
 from hexpipe.evaluation.controllers import ControllerSpec
 from hexpipe.evaluation.episodes import EpisodeJob, run_episode
 from hexpipe.evaluation.suite import load_scenarios
+from hexpipe.rl.policy import PolicyError, load_policy
 from hexpipe.sim.terrain import TerrainError
 
 _observed = hexapod.HexapodEnv._observation
@@ -56,7 +57,9 @@ def main() -> None:
     try:
         params = load_params("params.yaml", overrides=a.overrides)
         load_scenarios([a.terrain])
-    except (ConfigError, TerrainError) as exc:
+        for policy in a.policies:  # refuse a missing or mismatched policy in one line, before any episode
+            load_policy(policy, params)
+    except (ConfigError, TerrainError, PolicyError) as exc:
         raise SystemExit(f"error: {exc}") from None
     if params.task.observe_position:
         raise SystemExit("error: task.observe_position is true: the body's first entry is x, not the height")

@@ -76,13 +76,13 @@ def main() -> None:
     except (ConfigError, PolicyError, EncoderError) as exc:
         raise SystemExit(f"error: {exc}") from None
     frame = pd.DataFrame([row for i in range(a.episodes) for row in episode(policy, head, params, i)])
+    if frame.empty:
+        raise SystemExit(f"error: no episode of {a.policy} brought the front feet to a face")
     with pd.option_context("display.width", 200):
         print(f"{a.policy}: extra_blocks, the front feet in the {BEFORE_FACE} m before each face")
         print(frame.round(3).to_string(index=False))
         print("\nmeans by outcome and face:")
         print(frame.groupby(["success", "face"]).mean(numeric_only=True).drop(columns="episode").round(3).to_string())
-    if frame.empty or math.isnan(frame.b.mean()):
-        raise SystemExit("error: no episode reached a face")
 
 
 if __name__ == "__main__":

@@ -17,6 +17,7 @@ from hexpipe.envs.hexapod import quat_to_roll_pitch
 from hexpipe.evaluation.controllers import ControllerSpec
 from hexpipe.evaluation.episodes import EpisodeJob, run_episode
 from hexpipe.evaluation.suite import load_scenarios
+from hexpipe.rl.policy import PolicyError, load_policy
 from hexpipe.sim.terrain import TerrainError
 
 EVERY = 5  # control steps between rows (0.25 s at 20 Hz)
@@ -33,7 +34,8 @@ def main() -> None:
     try:
         params = load_params("params.yaml", overrides=a.overrides)
         scenario = load_scenarios([a.terrain])[0]
-    except (ConfigError, TerrainError) as exc:
+        load_policy(a.policy, params)  # refuse a missing or mismatched policy in one line, before the episode
+    except (ConfigError, TerrainError, PolicyError) as exc:
         raise SystemExit(f"error: {exc}") from None
     rows: list[tuple[float, ...]] = []
 
