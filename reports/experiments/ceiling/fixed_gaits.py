@@ -15,12 +15,9 @@ import argparse
 from concurrent.futures import ProcessPoolExecutor
 
 import pandas as pd
+from episodes import checked_inputs, evaluate_episode  # the helper beside this script
 
-from hexpipe.config import ConfigError, load_params
 from hexpipe.evaluation.controllers import ControllerSpec
-from hexpipe.evaluation.episodes import EpisodeJob, run_episode
-from hexpipe.evaluation.suite import load_scenarios
-from hexpipe.sim.terrain import TerrainError
 
 SUITE = ("flat", "single_block", "extra_blocks", "wide_block", "rough", "low_block", "tall_block", "steps_up",
          "block_near", "block_far")
@@ -29,10 +26,7 @@ RAISED = "cpg.upper=[0.4,0.8,6.283185]"
 
 def _one(job: tuple[tuple[float, float, float], str, int, tuple[str, ...]]) -> dict:
     gait, terrain, index, overrides = job
-    params = load_params("params.yaml", overrides=list(overrides))
-    scenario = load_scenarios([terrain])[0]
-    row = run_episode(params, EpisodeJob(scenario, ControllerSpec("best_fixed", gait=gait), index,
-                                         params.eval.seed + index)).row
+    row = evaluate_episode(ControllerSpec("best_fixed", gait=gait), terrain, index, overrides)
     name = f"a={gait[0]:.2f} b={gait[1]:.2f} omega={gait[2]:.2f}"
     return {"gait": name, "terrain": terrain, "success": bool(row["success"]),
             "cost_of_transport": row["cost_of_transport"], "time": row["time"]}
@@ -57,11 +51,7 @@ def main() -> None:
     gaits = [_gait(g) for g in a.gaits]
     terrains = a.terrains.split(",")
     overrides = (RAISED, *a.overrides)
-    try:
-        load_params("params.yaml", overrides=list(overrides))  # a bad key or value: one line, not a traceback
-        load_scenarios(terrains)
-    except (ConfigError, TerrainError) as exc:
-        raise SystemExit(f"error: {exc}") from None
+    checked_inputs(overrides, terrains)
     jobs = [(g, t, i, overrides) for g in gaits for t in terrains for i in range(a.episodes)]
     with ProcessPoolExecutor(a.workers) as pool:
         frame = pd.DataFrame(list(pool.map(_one, jobs)))

@@ -16,13 +16,9 @@ from __future__ import annotations
 import argparse
 from concurrent.futures import ProcessPoolExecutor
 
-from hexpipe.config import ConfigError, load_params
+from episodes import checked_inputs, policy_episode  # the helper beside this script
+
 from hexpipe.envs import hexapod
-from hexpipe.evaluation.controllers import ControllerSpec
-from hexpipe.evaluation.episodes import EpisodeJob, run_episode
-from hexpipe.evaluation.suite import load_scenarios
-from hexpipe.rl.policy import PolicyError, load_policy
-from hexpipe.sim.terrain import TerrainError
 
 _observed = hexapod.HexapodEnv._observation
 
@@ -39,10 +35,7 @@ def _clamp_height(height: float):
 def _one(job: tuple[str, str, int, float | None, tuple[str, ...]]) -> tuple[bool, float]:
     policy, terrain, index, height, overrides = job
     hexapod.HexapodEnv._observation = _observed if height is None else _clamp_height(height)
-    params = load_params("params.yaml", overrides=list(overrides))
-    job_ = EpisodeJob(load_scenarios([terrain])[0], ControllerSpec("policy", policy), index, params.eval.seed + index)
-    row = run_episode(params, job_).row
-    return bool(row["success"]), float(row["distance"])
+    return policy_episode(policy, terrain, index, overrides)
 
 
 def main() -> None:
@@ -54,13 +47,7 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--set", dest="overrides", action="append", default=[], metavar="SECTION.KEY=VALUE")
     a = ap.parse_args()
-    try:
-        params = load_params("params.yaml", overrides=a.overrides)
-        load_scenarios([a.terrain])
-        for policy in a.policies:  # refuse a missing or mismatched policy in one line, before any episode
-            load_policy(policy, params)
-    except (ConfigError, TerrainError, PolicyError) as exc:
-        raise SystemExit(f"error: {exc}") from None
+    params = checked_inputs(a.overrides, [a.terrain], a.policies)
     if params.task.observe_position:
         raise SystemExit("error: task.observe_position is true: the body's first entry is x, not the height")
     print(f"{a.terrain}, {a.episodes} episodes; height held at {a.height} m")

@@ -12,13 +12,10 @@ from __future__ import annotations
 
 import argparse
 
-from hexpipe.config import ConfigError, load_params
+from episodes import checked_inputs, evaluate_episode  # the helper beside this script
+
 from hexpipe.envs.hexapod import quat_to_roll_pitch
 from hexpipe.evaluation.controllers import ControllerSpec
-from hexpipe.evaluation.episodes import EpisodeJob, run_episode
-from hexpipe.evaluation.suite import load_scenarios
-from hexpipe.rl.policy import PolicyError, load_policy
-from hexpipe.sim.terrain import TerrainError
 
 EVERY = 5  # control steps between rows (0.25 s at 20 Hz)
 
@@ -31,12 +28,7 @@ def main() -> None:
     ap.add_argument("--from", dest="start", type=float, default=0.0)
     ap.add_argument("--set", dest="overrides", action="append", default=[], metavar="SECTION.KEY=VALUE")
     a = ap.parse_args()
-    try:
-        params = load_params("params.yaml", overrides=a.overrides)
-        scenario = load_scenarios([a.terrain])[0]
-        load_policy(a.policy, params)  # refuse a missing or mismatched policy in one line, before the episode
-    except (ConfigError, TerrainError, PolicyError) as exc:
-        raise SystemExit(f"error: {exc}") from None
+    checked_inputs(a.overrides, [a.terrain], [a.policy])
     rows: list[tuple[float, ...]] = []
 
     def record(env, reward, info, ended) -> None:
@@ -46,8 +38,7 @@ def main() -> None:
         rows.append((env.steps * env.control_dt, pos[0] - env.start_xy[0], pos[2] - below, pitch, lin[0],
                      *env.cpg.params, env.cpg.rates[1], reward))
 
-    job = EpisodeJob(scenario, ControllerSpec("policy", a.policy), a.episode, params.eval.seed + a.episode)
-    row = run_episode(params, job, on_step=record).row
+    row = evaluate_episode(ControllerSpec("policy", a.policy), a.terrain, a.episode, a.overrides, on_step=record)
     print(f"{a.terrain} episode {a.episode}: {row['termination']} at {row['distance']:.2f} m after {row['time']} s, "
           f"stall legs {row['stall_legs']}")
     print("    t      x  height  pitch     vx      a      b  omega  b_rate  reward")

@@ -1,0 +1,44 @@
+"""What the scripts beside this one share: their inputs checked up front, and one of evaluate's episodes.
+
+A bad --set key, terrain name or policy folder is refused in one line before any episode runs. An episode is
+evaluate's own: episode `index` of a terrain runs with seed eval.seed + index, so its outcome is the one in a sweep
+trial's results.csv for the same policy.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from typing import Any
+
+from hexpipe.config import ConfigError, Params, load_params
+from hexpipe.evaluation.controllers import ControllerSpec
+from hexpipe.evaluation.episodes import EpisodeJob, run_episode
+from hexpipe.evaluation.suite import load_scenarios
+from hexpipe.rl.policy import PolicyError, load_policy
+from hexpipe.sim.terrain import TerrainError
+
+
+def checked_inputs(overrides: Sequence[str], terrains: Sequence[str] = (), policies: Sequence[str] = ()) -> Params:
+    """params.yaml with the overrides, after checking the terrains and the policies (each loadable under them)."""
+    try:
+        params = load_params("params.yaml", overrides=list(overrides))
+        load_scenarios(list(terrains))
+        for policy in policies:
+            load_policy(policy, params)
+    except (ConfigError, TerrainError, PolicyError) as exc:
+        raise SystemExit(f"error: {exc}") from None
+    return params
+
+
+def evaluate_episode(controller: ControllerSpec, terrain: str, index: int, overrides: Sequence[str],
+                     on_step: Callable[..., None] | None = None) -> dict[str, Any]:
+    """Evaluate's episode `index` of `terrain` for the controller: its results row."""
+    params = load_params("params.yaml", overrides=list(overrides))
+    job = EpisodeJob(load_scenarios([terrain])[0], controller, index, params.eval.seed + index)
+    return run_episode(params, job, on_step=on_step).row
+
+
+def policy_episode(policy: str, terrain: str, index: int, overrides: Sequence[str]) -> tuple[bool, float]:
+    """(success, distance in m) of evaluate's episode `index` of `terrain` for the policy in `policy`."""
+    row = evaluate_episode(ControllerSpec("policy", policy), terrain, index, overrides)
+    return bool(row["success"]), float(row["distance"])
