@@ -335,6 +335,10 @@ class PpoConfig(_Section):
     # a policy lifts, and the task's return ranks the draws that lift higher). 1: one run, still validated
     candidates: PositiveInt = 3
     validation_episodes: Annotated[int, Field(ge=0)] = 60  # 0: no validation (then candidates must be 1)
+    # how the candidate is kept: "return", the highest validation return; "success", success first: the highest
+    # return among the candidates whose validation success is within selection_tolerance of the best one's
+    selection: Literal["return", "success"] = "return"
+    selection_tolerance: Annotated[float, Field(ge=0, le=1, allow_inf_nan=False)] = 0.04  # two episodes of 60
     checkpoint_every: PositiveInt = 20_000
     encoder_dir: str = "data/models/vae"
     out_dir: str = "data/models/ppo"

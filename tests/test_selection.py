@@ -42,6 +42,17 @@ def test_candidate_seeds_step_by_a_thousand_and_choice_keeps_the_first_of_equal_
         choose([])
 
 
+def test_success_first_lets_only_the_candidates_near_the_best_success_compete_on_return():
+    returns, successes = [1400.0, 1200.0, 900.0], [0.85, 0.95, 0.9333]
+    assert choose(returns) == 0  # the return rule keeps the draw that fails most
+    assert choose(returns, successes, tolerance=0.04) == 1
+    assert choose(returns, successes, tolerance=0.0) == 1
+    assert choose(returns, successes, tolerance=0.1) == 0  # 0.85 is within 0.1 of 0.95: return decides again
+    assert choose([900.0, 1000.0], [0.9, 0.9], tolerance=0.0) == 1  # equal success: the return breaks the tie
+    with pytest.raises(ValueError, match="2 success rates for 3 candidates"):
+        choose(returns, [0.9, 0.9])
+
+
 def test_one_candidate_keeps_its_folders_and_several_get_their_own(tmp_path):
     one = tiny(tmp_path)
     assert candidate_params(one, 0) is one
@@ -115,3 +126,21 @@ def test_fewer_candidates_drop_the_folders_of_more(tmp_path):
     assert (tmp_path / "ppo" / "checkpoints").is_dir()
     record = json.loads((tmp_path / "reports" / SELECTION).read_text())
     assert record["chosen_seed"] == 0 and record["candidates"] == {}  # no validation asked for: nothing scored
+
+
+def test_success_first_keeps_the_candidate_that_crosses_more_though_its_return_is_lower(tmp_path, monkeypatch):
+    canned = {3: {"return": 1400.0, "success": 0.85}, 1003: {"return": 1200.0, "success": 0.95}}
+
+    def scores(run, _out, _signature, workers):
+        return {**canned[run.ppo.seed], "distance": 3.0, "b_mean": 0.3, "episodes": 3}
+
+    monkeypatch.setattr(selection, "validate", scores)
+    kept = {}
+    for rule in ("return", "success"):
+        params = tiny(tmp_path / rule, "ppo.candidates=2", "ppo.seed=3", f"ppo.selection={rule}")
+        kept[rule] = train_policy(params, show_progress=False)["selection/chosen_seed"]
+        record = json.loads((tmp_path / rule / "reports" / SELECTION).read_text())
+        assert record["chosen_seed"] == kept[rule]
+    assert kept == {"return": 3, "success": 1003}
+    with pytest.raises(ConfigError, match="selection"):
+        load_params(ROOT / "params.yaml", ["ppo.selection=best"])

@@ -55,11 +55,22 @@ def candidate_params(params: Params, seed: int) -> Params:
     return params.model_copy(update={"ppo": ppo})
 
 
-def choose(returns: list[float]) -> int:
-    """The index of the highest mean validation return; a tie goes to the earlier candidate (the lower seed)."""
+def choose(returns: list[float], successes: list[float] | None = None, tolerance: float = 0.0) -> int:
+    """The index of the highest mean validation return; a tie goes to the earlier candidate (the lower seed).
+
+    With `successes` (validation success rates, one per candidate), success comes first: only the candidates within
+    `tolerance` of the best success compete on return (ppo.selection: success; the order evaluate picks the best
+    fixed gait in). Validation success ranks the draws that cross the suite better than the return does (issue 10,
+    reports/experiments/README.md, pipe34)."""
     if not returns:
         raise ValueError("no candidates to choose from")
-    return int(np.argmax(np.asarray(returns, dtype=float)))  # argmax returns the first of equal maxima
+    score = np.asarray(returns, dtype=float)
+    if successes is not None:
+        if len(successes) != len(returns):
+            raise ValueError(f"{len(successes)} success rates for {len(returns)} candidates")
+        success = np.asarray(successes, dtype=float)
+        score = np.where(success >= success.max() - tolerance - 1e-9, score, -np.inf)
+    return int(np.argmax(score))  # argmax returns the first of equal maxima
 
 
 def _validation_episode(args: tuple[Params, str, str, int, int]) -> dict[str, Any]:
@@ -148,7 +159,10 @@ def train_policy(params: Params, resume: bool = False, show_progress: bool = Tru
             say(f"train-ppo: seed {seed}: validation return {scores['return']:.1f} over {scores['episodes']} "
                 f"episodes, success {scores['success']:.0%}, mean lift b {scores['b_mean']:.2f} rad")
         runs.append({"seed": seed, "params": run, "metrics": metrics, "scores": scores})
-    chosen = runs[choose([r["scores"]["return"] for r in runs])] if cfg.validation_episodes else runs[0]
+    chosen = runs[0]
+    if cfg.validation_episodes:
+        successes = [r["scores"]["success"] for r in runs] if cfg.selection == "success" else None
+        chosen = runs[choose([r["scores"]["return"] for r in runs], successes, cfg.selection_tolerance)]
     if cfg.candidates > 1:
         _export(chosen["params"].ppo, cfg)
     write_json(Path(cfg.report_dir) / SELECTION, {
