@@ -1,6 +1,6 @@
 """Two ways to keep one of three candidates, judged on the suite: the highest validation return (train-ppo's rule)
-against success first (the highest validation return among the candidates whose validation success is within TOL
-of the best one's), the order evaluate uses to pick the best fixed gait.
+against success first (`ppo.selection=success`: the highest validation return among the candidates whose
+validation success is within TOL of the best one's), the order evaluate uses to pick the best fixed gait.
 
     .venv/bin/python reports/experiments/select/rules.py reports/sweeps/pipe34 [reports/sweeps/floorpipe ...] \
         [--tolerance 0.04]
@@ -20,10 +20,9 @@ import itertools
 import json
 from pathlib import Path
 
-import numpy as np
 import pandas as pd
 
-from hexpipe.rl.selection import SEED_STRIDE
+from hexpipe.rl.selection import SEED_STRIDE, choose
 
 CANDIDATES = 3
 EXTRA_TARGET, LIFT_TARGET = 0.95, 0.15
@@ -56,14 +55,13 @@ def trials(sweep: Path) -> pd.DataFrame:
 
 def by_return(group: pd.DataFrame) -> int:
     """train-ppo's rule: the highest validation return (the first of equals)."""
-    return int(np.argmax(group["v_return"].to_numpy()))
+    return choose(group["v_return"].tolist())
 
 
 def success_first(tolerance: float):
+    """`ppo.selection=success`: the highest return among the candidates within `tolerance` of the best success."""
     def rule(group: pd.DataFrame) -> int:
-        success = group["v_success"].to_numpy()
-        eligible = success >= success.max() - tolerance - 1e-9
-        return int(np.argmax(np.where(eligible, group["v_return"].to_numpy(), -np.inf)))
+        return choose(group["v_return"].tolist(), group["v_success"].tolist(), tolerance)
     return rule
 
 
