@@ -3,7 +3,12 @@ terrain, run as observed and again with the policy's b (and optionally omega) ov
 --from metres: b is driven to its ceiling and held there; with --omega W, omega is also steered to W rad/s.
 
     .venv/bin/python reports/experiments/ceiling/hold_lift.py POLICY_DIR ... [--terrain extra_blocks]
-        [--episodes 10] [--from 1.2] [--omega 4.712389] [--set section.key=value ...]
+        [--episodes 10] [--from 1.2] [--omega 4.712389] [--zone] [--set section.key=value ...]
+
+--zone runs, beside the observed episodes, one other arm: b driven to its ceiling wherever the true terrain from
+0.6 m behind the base to 0.7 m ahead rises or falls by more than 3 cm (where task.lift_free_zone waives the lift
+price), on any terrain: a reflex that lifts wherever the feet meet uneven ground, the structural lever the
+straddle points to, tried on trained policies before it is built into training.
 
 From 1.2 m on extra blocks the front feet are 0.5 m before the second face (2.0 m) and the hind feet leave the
 first block's top. A fixed gait at a 0.4, b 0.5 crosses extra blocks 18 of 20 at omega pi and 20 of 20 at 1.5 pi
@@ -22,6 +27,8 @@ import numpy as np
 from episodes import checked_inputs, policy_episode  # the helper beside this script
 
 from hexpipe.envs import hexapod
+from hexpipe.envs.rewards import lift_waived
+from hexpipe.sensors.heightmap import quat_to_yaw
 
 _step = hexapod.HexapodEnv.step
 OMEGA_GAIN, OMEGA_DAMPING = 4.0, 2.0  # the action (omega's acceleration, in [-1, 1]) steering omega to its target
@@ -39,13 +46,25 @@ def _override(start: float, omega: float | None):
     return step
 
 
+ZONE = (0.6, 0.7)  # m behind and ahead of the base: the default task.lift_free_zone, where the feet reach
+
+
+def _zone_hold(self, action):  # the env's own step, b driven up while the feet's reach holds uneven terrain
+    pos, quat = self.robot.base_state()[:2]
+    if lift_waived(self.terrain.relief(float(pos[0]), float(pos[1]), quat_to_yaw(quat), *ZONE)):
+        action = np.array(action, dtype=float, copy=True)
+        action[1] = 1.0
+    return _step(self, action)
+
+
 ARMS = ("observed", "b held", "b held, omega steered")
+ZONE_ARMS = ("observed", "b held in the zone")
 
 
 def _one(job: tuple[str, str, int, str, float, float, tuple[str, ...]]) -> tuple[bool, float]:
     policy, terrain, index, arm, start, omega, overrides = job
     hexapod.HexapodEnv.step = {"observed": _step, "b held": _override(start, None),
-                               "b held, omega steered": _override(start, omega)}[arm]
+                               "b held, omega steered": _override(start, omega), "b held in the zone": _zone_hold}[arm]
     return policy_episode(policy, terrain, index, overrides)
 
 
@@ -56,19 +75,25 @@ def main() -> None:
     ap.add_argument("--episodes", type=int, default=10)
     ap.add_argument("--from", dest="start", type=float, default=1.2)
     ap.add_argument("--omega", type=float, default=1.5 * np.pi)
+    ap.add_argument("--zone", action="store_true", help="the observed arm and the zone reflex only")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--set", dest="overrides", action="append", default=[], metavar="SECTION.KEY=VALUE")
     a = ap.parse_args()
     params = checked_inputs(a.overrides, [a.terrain], a.policies)
-    print(f"{a.terrain}, {a.episodes} episodes; from {a.start} m on: b driven to its ceiling "
-          f"({params.cpg.upper[1]} rad), omega steered to {a.omega:.3f} rad/s in the last arm")
-    print(f"{'policy':<40} " + "  ".join(f"{arm:>21}" for arm in ARMS) + "   failures (m), per arm")
-    jobs = [(p, a.terrain, i, arm, a.start, a.omega, tuple(a.overrides)) for p in a.policies for arm in ARMS
+    arms = ZONE_ARMS if a.zone else ARMS
+    if a.zone:
+        print(f"{a.terrain}, {a.episodes} episodes; b driven to its ceiling ({params.cpg.upper[1]} rad) wherever the "
+              f"terrain {ZONE[0]} m behind to {ZONE[1]} m ahead of the base is uneven")
+    else:
+        print(f"{a.terrain}, {a.episodes} episodes; from {a.start} m on: b driven to its ceiling "
+              f"({params.cpg.upper[1]} rad), omega steered to {a.omega:.3f} rad/s in the last arm")
+    print(f"{'policy':<40} " + "  ".join(f"{arm:>21}" for arm in arms) + "   failures (m), per arm")
+    jobs = [(p, a.terrain, i, arm, a.start, a.omega, tuple(a.overrides)) for p in a.policies for arm in arms
             for i in range(a.episodes)]
     with ProcessPoolExecutor(a.workers) as pool:
         out = iter(list(pool.map(_one, jobs)))
     for policy in a.policies:
-        runs = [[next(out) for _ in range(a.episodes)] for _ in ARMS]
+        runs = [[next(out) for _ in range(a.episodes)] for _ in arms]
         counts = "  ".join(f"{sum(ok for ok, _ in r):>18}/{a.episodes:<2}" for r in runs)
         fails = " | ".join(" ".join(f"{d:.2f}" for ok, d in r if not ok) or "-" for r in runs)
         print(f"{policy:<40} {counts}   {fails}")
