@@ -5,9 +5,9 @@ terrain, run as observed and again with the policy's b (and optionally omega) ov
     .venv/bin/python reports/experiments/ceiling/hold_lift.py POLICY_DIR ... [--terrain extra_blocks]
         [--episodes 10] [--from 1.2] [--omega 4.712389] [--zone] [--set section.key=value ...]
 
---zone runs, beside the observed episodes, one other arm: b driven to its ceiling wherever the true terrain from
-0.6 m behind the base to 0.7 m ahead rises or falls by more than 3 cm (where task.lift_free_zone waives the lift
-price), on any terrain: a reflex that lifts wherever the feet meet uneven ground, the structural lever the
+--zone runs, beside the observed episodes, one other arm: b driven to its ceiling wherever the true terrain in
+task.lift_free_zone (0.6 m behind the base to 0.7 m ahead) rises or falls by more than 3 cm (where the lift price is
+waived), on any terrain: a reflex that lifts wherever the feet meet uneven ground, the structural lever the
 straddle points to, tried on trained policies before it is built into training.
 
 From 1.2 m on extra blocks the front feet are 0.5 m before the second face (2.0 m) and the hind feet leave the
@@ -34,11 +34,17 @@ _step = hexapod.HexapodEnv.step
 OMEGA_GAIN, OMEGA_DAMPING = 4.0, 2.0  # the action (omega's acceleration, in [-1, 1]) steering omega to its target
 
 
+def _lifted(action) -> np.ndarray:
+    """A copy of the action with b's acceleration at +1: b rises to its ceiling and stays there."""
+    action = np.array(action, dtype=float, copy=True)
+    action[1] = 1.0
+    return action
+
+
 def _override(start: float, omega: float | None):
     def step(self, action):  # the env's own step, the policy's action replaced past `start`
         if self._last_x - self.start_xy[0] >= start:
-            action = np.array(action, dtype=float, copy=True)
-            action[1] = 1.0  # b accelerates to its ceiling and stays there
+            action = _lifted(action)
             if omega is not None:
                 error, rate = omega - float(self.cpg.params[2]), float(self.cpg.rates[2])
                 action[2] = float(np.clip(OMEGA_GAIN * error - OMEGA_DAMPING * rate, -1.0, 1.0))
@@ -46,15 +52,10 @@ def _override(start: float, omega: float | None):
     return step
 
 
-ZONE = (0.6, 0.7)  # m behind and ahead of the base: the default task.lift_free_zone, where the feet reach
-
-
 def _zone_hold(self, action):  # the env's own step, b driven up while the feet's reach holds uneven terrain
     pos, quat = self.robot.base_state()[:2]
-    if lift_waived(self.terrain.relief(float(pos[0]), float(pos[1]), quat_to_yaw(quat), *ZONE)):
-        action = np.array(action, dtype=float, copy=True)
-        action[1] = 1.0
-    return _step(self, action)
+    relief = self.terrain.relief(float(pos[0]), float(pos[1]), quat_to_yaw(quat), *self.task.lift_free_zone)
+    return _step(self, _lifted(action) if lift_waived(relief) else action)
 
 
 ARMS = ("observed", "b held", "b held, omega steered")
@@ -82,8 +83,11 @@ def main() -> None:
     params = checked_inputs(a.overrides, [a.terrain], a.policies)
     arms = ZONE_ARMS if a.zone else ARMS
     if a.zone:
+        if params.task.lift_free_zone is None:
+            raise SystemExit("error: --zone reads task.lift_free_zone, which is null; set it, e.g. [0.6, 0.7]")
+        behind, ahead = params.task.lift_free_zone
         print(f"{a.terrain}, {a.episodes} episodes; b driven to its ceiling ({params.cpg.upper[1]} rad) wherever the "
-              f"terrain {ZONE[0]} m behind to {ZONE[1]} m ahead of the base is uneven")
+              f"terrain {behind} m behind to {ahead} m ahead of the base is uneven")
     else:
         print(f"{a.terrain}, {a.episodes} episodes; from {a.start} m on: b driven to its ceiling "
               f"({params.cpg.upper[1]} rad), omega steered to {a.omega:.3f} rad/s in the last arm")
