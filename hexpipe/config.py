@@ -224,7 +224,17 @@ class TaskConfig(_Section):
     # the observation's `body` starts with x, y relative to the start (the paper's state); false drops them, so the
     # policy must find the block with its terrain sensor instead of memorising where it was (body: 13 -> 11 numbers)
     observe_position: bool = False
+    # true: every leg swings at least as high as a reflex that reads the height map, ramping to b's ceiling while the
+    # map shows the terrain in lift_free_zone rising or falling by more than 3 cm, and back to b's floor elsewhere;
+    # the policy's b is untouched, the reflex only raises the swing (hexpipe/sim/lift_reflex.py; the `reflex` sweep)
+    lift_reflex: bool = False
     randomization: RandomizationConfig = RandomizationConfig()
+
+    @model_validator(mode="after")
+    def _reflex_has_a_zone(self) -> TaskConfig:
+        if self.lift_reflex and self.lift_free_zone is None:
+            raise ValueError("lift_reflex reads the terrain in lift_free_zone, which is null; set it, e.g. [0.6, 0.7]")
+        return self
 
 
 class CollectConfig(_Section):
@@ -443,6 +453,24 @@ class Params(_Section):
     ppo: PpoConfig = PpoConfig()
     eval: EvalConfig = EvalConfig()
     sweep: SweepConfig = SweepConfig()
+
+    @model_validator(mode="after")
+    def _reflex_zone_on_the_map(self) -> Params:
+        """task.lift_reflex reads task.lift_free_zone off the height map: the map must hold part of the zone."""
+        if self.task.lift_reflex and not reflex_zone(self.sensors, self.task).any():
+            raise ValueError(f"task.lift_free_zone {list(self.task.lift_free_zone)} lies outside the height map "
+                             f"(sensors.heightmap_ahead {list(self.sensors.heightmap_ahead)}): lift_reflex sees none "
+                             "of it")
+        return self
+
+
+def reflex_zone(sensors: SensorConfig, task: TaskConfig) -> Any:
+    """The height-map cells the lift reflex reads ((rows, cols) bool; `hexpipe.sim.lift_reflex.zone_mask`)."""
+    from hexpipe.sim.lift_reflex import zone_mask
+
+    near, far = sensors.heightmap_ahead
+    behind, ahead = task.lift_free_zone
+    return zone_mask(near, far, sensors.heightmap_rows, sensors.heightmap_cols, sensors.heightmap_width, behind, ahead)
 
 
 def params_hash(params: Params, **stage_excludes: set[str]) -> str:

@@ -245,11 +245,11 @@ def test_lift_is_split_between_the_last_30_cm_before_a_face_and_open_ground():
     distance = np.arange(0.05, 3.0, 0.1)  # one trace row every 0.1 m, between the window edges
     b = np.where((distance >= 0.45) & (distance <= 1.75), 0.45, 0.15)  # lifts from 0.55 m before to 0.45 m past
     trace = np.zeros((len(distance), len(TRACE_COLUMNS)), dtype=np.float32)
-    trace[:, TRACE_COLUMNS.index("distance")], trace[:, TRACE_COLUMNS.index("b")] = distance, b
+    trace[:, TRACE_COLUMNS.index("distance")], trace[:, TRACE_COLUMNS.index("lift")] = distance, b
     before, away = lift_before_and_away(trace, [(1.0, 1.3)])  # before: 0.7 .. 1.0 m; open: past 1.8 m
     assert before == pytest.approx(0.45) and away == pytest.approx(0.15)
     lifts_late = trace.copy()
-    lifts_late[:, TRACE_COLUMNS.index("b")] = np.where(distance >= 0.95, 0.45, 0.15)
+    lifts_late[:, TRACE_COLUMNS.index("lift")] = np.where(distance >= 0.95, 0.45, 0.15)
     assert lift_before_and_away(lifts_late, [(1.0, 1.3)])[0] == pytest.approx((2 * 0.15 + 0.45) / 3)
     before, away = lift_before_and_away(trace, [])  # no block: nothing before one, everything open
     assert np.isnan(before) and away == pytest.approx(b.mean())

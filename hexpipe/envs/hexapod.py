@@ -11,7 +11,8 @@ Observation (Dict):
   `heightmap` (rows * cols,) float32 m, row-major; `rgb` (H, W, 3) uint8; `contacts` (12,) per-leg contact
   flags then normal forces (N).
 Action: Box [-1, 1]^3, scaled by `CpgConfig.accel_limit` to d^2/dt^2 (a, b, omega), or with `action_order: 1` by
-`CpgConfig.rate_limit` to d/dt (a, b, omega).
+`CpgConfig.rate_limit` to d/dt (a, b, omega). With `TaskConfig.lift_reflex` the legs swing at least as high as a
+reflex that reads the height map (hexpipe/sim/lift_reflex.py); `info["lift"]` is the front legs' lift (rad).
 Reward: `reward_scale` * forward velocity (m/s, displacement over the control step), as in the paper, minus
 `power_cost` * mean mechanical joint power (W) when that is set (0 is the paper's reward), minus `lift_cost` * the lift
 b above its floor (rad) when that is set (waived near uneven terrain with `lift_free_zone`), minus `failure_penalty`
@@ -34,13 +35,21 @@ import numpy as np
 from gymnasium import spaces
 
 from hexpipe import sensors as registry
-from hexpipe.config import CpgConfig, Params, SensorConfig, SimConfig, TaskConfig
+from hexpipe.config import CpgConfig, Params, SensorConfig, SimConfig, TaskConfig, reflex_zone
 from hexpipe.envs.privileged import PRIVILEGED, corridor_columns, privileged_space, privileged_vector
-from hexpipe.envs.rewards import failure_penalty, forward_velocity_reward, lift_penalty, lift_waived, power_penalty
+from hexpipe.envs.rewards import (
+    RELIEF_M,
+    failure_penalty,
+    forward_velocity_reward,
+    lift_penalty,
+    lift_waived,
+    power_penalty,
+)
 from hexpipe.envs.state import WORLD_FRAME, EnvScene, EnvState
 from hexpipe.sensors.heightmap import HEADING_FRAME, quat_to_yaw, reference_height
 from hexpipe.sim.cpg import CPG
 from hexpipe.sim.gait import GaitMap, slew_path
+from hexpipe.sim.lift_reflex import LiftReflex
 from hexpipe.sim.lift_trail import LiftTrail, foot_lags
 from hexpipe.sim.robot import Robot, RobotSpec, robot_shapes
 from hexpipe.sim.terrain import Terrain, TerrainRecipe, build_terrain, load_terrain, realize
@@ -124,14 +133,19 @@ class HexapodEnv(gym.Env):
         self.cpg = CPG(self.cpg_cfg, np.array([leg.tripod for leg in self.robot_spec.legs]))
         self.trail = (LiftTrail(foot_lags(self.robot_spec, self.sim_cfg.stance_reach), self.max_steps + 1)
                       if self.cpg_cfg.lift_follows else None)
+        self.reflex = (LiftReflex(reflex_zone(self.sensor_cfg, self.task), RELIEF_M, self.cpg_cfg.lower[1],
+                                  self.cpg_cfg.upper[1], self.cpg_cfg.rate_limit[1], self.cpg_cfg.falling_limit[1])
+                       if self.task.lift_reflex else None)
         self._readers: dict[str, Callable[[registry.SimView], np.ndarray]] = {}  # made on first use
         self.lift_cost_share = 1.0  # of task.lift_cost charged now: train-ppo's ppo.lift_cost_ramp lowers it
 
         self.action_space = spaces.Box(-1.0, 1.0, shape=(3,), dtype=np.float32)
         self.observation_space = observation_space(self.cpg_cfg, self.sensor_cfg, self.task, privileged)
         self._observed = list(self.task.sensors)
-        # what one observation reads: the observed sensors, and the height map for the privileged profile
-        self._sensed = self._observed + (["heightmap"] if privileged and "heightmap" not in self._observed else [])
+        # what one observation reads: the observed sensors, and the height map for the privileged profile and the
+        # lift reflex (which reads it whether or not the policy does)
+        needs_map = (privileged or self.reflex is not None) and "heightmap" not in self._observed
+        self._sensed = self._observed + (["heightmap"] if needs_map else [])
         self._physics = (self.sim_cfg.friction, 1.0)  # (friction, base-mass scale) drawn at reset
         self._corridor = corridor_columns(self.sensor_cfg) if privileged else None
         order_one = self.cpg_cfg.action_order == 1
@@ -179,6 +193,8 @@ class HexapodEnv(gym.Env):
         self.cpg.reset(self.initial_cpg, phase0=phase0)
         if self.trail is not None:
             self.trail.reset()
+        if self.reflex is not None:
+            self.reflex.reset()
         ground = float(self.terrain.height_at(np.zeros(1), np.zeros(1))[0])
         start = (0.0, 0.0, ground + self.sim_cfg.body_height + 0.01)
         self.robot = Robot(c, self.robot_spec, start)
@@ -214,6 +230,9 @@ class HexapodEnv(gym.Env):
             x = self._last_x
             self.trail.record(x, float(self.cpg.params[1]))
             floor = self.trail.floor(x)
+        if self.reflex is not None:  # ramped over this control step from what the last height map showed
+            lift = self.reflex.advance(self.control_dt)
+            floor = np.full(len(self.robot_spec.legs), lift) if floor is None else np.maximum(floor, lift)
         xy = self.cpg.advance(command, self.physics_dt, self.substeps, floor)
         targets = slew_path(self._targets, self.gait.joint_targets(xy), self._max_joint_step)
         self._targets = targets[-1]
@@ -294,6 +313,8 @@ class HexapodEnv(gym.Env):
             "cpg": np.concatenate([self.cpg.params, self.cpg.rates]).astype(np.float32),
         }
         sensed = self.sense(self._sensed, base=(pos, quat))
+        if self.reflex is not None:
+            self.reflex.see(sensed["heightmap"])
         for name in self._observed:
             obs[name] = registry.get(name).observation(sensed[name])
         if self.privileged:
@@ -334,6 +355,7 @@ class HexapodEnv(gym.Env):
             "termination": termination,
             "time": self.steps * self.control_dt,
             "cpg": self.cpg.params.copy(),
+            "lift": self.lift,
             "reward_terms": reward_terms,
             "power": power,  # W, mean mechanical joint power over the last control step
             "energy": self.energy,  # J since reset
@@ -395,6 +417,13 @@ class HexapodEnv(gym.Env):
             physicsClientId=self.client,
         )
         return np.asarray(rgba, dtype=np.uint8).reshape(240, 320, 4)[:, :, :3]
+
+    @property
+    def lift(self) -> float:
+        """The lift the front legs swing with now (rad): b, or the lift reflex's when that is higher (the middle
+        and hind legs may swing higher still, following the leader with `cpg.lift_follows`)."""
+        b = float(self.cpg.params[1])
+        return b if self.reflex is None else max(b, self.reflex.level)
 
     def set_lift_cost_share(self, share: float) -> None:
         """Charge `share` (in [0, 1]) of task.lift_cost from the next step: train-ppo ramps the price in with it."""

@@ -20,7 +20,9 @@ from hexpipe.evaluation.controllers import ControllerSpec, build, gait_label
 from hexpipe.evaluation.suite import Scenario
 
 StepHook = Callable[[HexapodEnv, float, dict[str, Any], bool], None]
-TRACE_COLUMNS = ("time", "distance", "a", "b", "omega")  # s, m, rad, rad, rad/s
+# s, m, rad, rad, rad/s, rad: the CPG parameters, then the lift the front legs swing with (b, or the lift reflex's
+# when that is higher: `HexapodEnv.lift`), which the lift statistics read
+TRACE_COLUMNS = ("time", "distance", "a", "b", "omega", "lift")
 # The lift statistics, by the body's forward distance (m from the start). "Before the face": the last BEFORE_FACE
 # before a block's start, where an adaptive gait must be lifting (issue 10's adaptation measure). "Open ground":
 # farther than NEAR_BEFORE before any block (the front feet reach about FRONT_REACH ahead of the base and a policy
@@ -89,12 +91,12 @@ def _stall_legs(env: HexapodEnv, termination: str | None) -> str:
 
 
 def lift_before_and_away(trace: np.ndarray, obstacles: list[tuple[float, float]]) -> tuple[float, float]:
-    """Mean b (rad) over the steps in the BEFORE_FACE before a block and over the steps on open ground; NaN where
-    there were none (no block, or stuck before reaching the window).
+    """Mean lift (rad; b, or the lift reflex's when higher) over the steps in the BEFORE_FACE before a block and
+    over the steps on open ground; NaN where there were none (no block, or stuck before reaching the window).
 
     An adaptive gait lifts its feet before blocks and lowers them elsewhere; a fixed gait has the same b in both.
     """
-    x, b = trace[:, TRACE_COLUMNS.index("distance")], trace[:, TRACE_COLUMNS.index("b")]
+    x, b = trace[:, TRACE_COLUMNS.index("distance")], trace[:, TRACE_COLUMNS.index("lift")]
     before, near = np.zeros(len(x), dtype=bool), np.zeros(len(x), dtype=bool)
     for lo, hi in obstacles:
         before |= (x >= lo - BEFORE_FACE) & (x < lo)
@@ -108,7 +110,7 @@ def _feet(env: HexapodEnv) -> np.ndarray:
 
 
 def _trace_row(info: dict[str, Any]) -> list[float]:
-    return [info["time"], info["distance"], *map(float, info["cpg"])]
+    return [info["time"], info["distance"], *map(float, info["cpg"]), info["lift"]]
 
 
 def run_episode(params: Params, job: EpisodeJob, on_step: StepHook | None = None) -> EpisodeResult:

@@ -31,6 +31,8 @@ def lifts(traces: Path, lead: float) -> pd.DataFrame:
     at_body = [(block.face, block.face + block.depth)]
     at_feet = [(block.face - lead, block.face + block.depth - lead)]
     frame = pd.read_csv(traces)
+    if "lift" not in frame:  # traces from before the lift reflex: the front legs swung with b
+        frame["lift"] = frame["b"]
     rows = []
     for episode, trace in frame[(frame.terrain == TERRAIN) & (frame.controller == "policy")].groupby("episode"):
         cpg = trace[list(TRACE_COLUMNS)].to_numpy(dtype=np.float32)

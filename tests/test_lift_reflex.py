@@ -1,0 +1,108 @@
+"""The lift reflex (task.lift_reflex): its zone on the height map, its ramp, and what it does to a low gait."""
+
+import math
+
+import numpy as np
+import pytest
+
+from hexpipe.config import ConfigError, CpgConfig, Params, SensorConfig, TaskConfig, apply_overrides, reflex_zone
+from hexpipe.envs.hexapod import HexapodEnv
+from hexpipe.sim.lift_reflex import LiftReflex, map_relief, ramp_toward, zone_mask
+
+LOW_GAIT = (0.25, 0.15, 1.5 * math.pi)  # stopped by the 0.10 m block (tests/test_env.py, the premise)
+REFLEX = TaskConfig(sensors=(), lift_reflex=True)  # a blind policy: only the reflex reads the map
+
+
+def test_the_zone_is_the_cells_from_behind_the_hind_feet_to_ahead_of_the_front_feet_across_the_legs():
+    # the default map: 32 rows of 6.25 cm from 0.6 m behind the base, 32 columns of 5 cm across 1.6 m
+    mask = zone_mask(-0.6, 1.4, 32, 32, 1.6, behind=0.6, ahead=0.7)
+    rows, cols = np.nonzero(mask.any(axis=1))[0], np.nonzero(mask.any(axis=0))[0]
+    assert rows.tolist() == list(range(21))  # row 20's centre is at 0.681 m, row 21's at 0.744 m
+    assert cols.tolist() == list(range(10, 22))  # centres from -0.275 m to +0.275 m
+    assert mask.sum() == 21 * 12
+    assert np.array_equal(reflex_zone(SensorConfig(), TaskConfig()), mask)
+
+
+def test_relief_is_rise_minus_fall_inside_the_zone_only():
+    mask = zone_mask(-0.6, 1.4, 32, 32, 1.6, behind=0.6, ahead=0.7)
+    level = np.zeros((32, 32), dtype=np.float32)
+    assert map_relief(level + 0.37, mask) == 0.0  # any reference height: level ground has no relief
+    beyond = level.copy()
+    beyond[25:, :] = 0.10  # a block whose face is beyond the zone
+    assert map_relief(beyond, mask) == 0.0
+    inside = level.copy()
+    inside[18:, :] = 0.10  # ... and once the face is in the zone
+    assert map_relief(inside, mask) == pytest.approx(0.10)
+
+
+def test_the_reflex_ramps_at_bs_own_rates_toward_the_ceiling_near_relief_and_the_floor_elsewhere():
+    assert ramp_toward(0.2, 0.5, rise=1.0, fall=0.1, dt=0.05) == pytest.approx(0.25)
+    assert ramp_toward(0.48, 0.5, rise=1.0, fall=0.1, dt=0.05) == 0.5
+    assert ramp_toward(0.5, 0.2, rise=1.0, fall=0.1, dt=0.05) == pytest.approx(0.495)
+    mask = zone_mask(-0.6, 1.4, 32, 32, 1.6, behind=0.6, ahead=0.7)
+    reflex = LiftReflex(mask, relief=0.03, floor=0.2, ceiling=0.5, rise=1.0, fall=1.0)
+    flat, block = np.zeros((32, 32)), np.zeros((32, 32))
+    block[15:, :] = 0.04
+    reflex.see(flat)
+    assert [reflex.advance(0.05) for _ in range(3)] == [0.2, 0.2, 0.2]
+    reflex.see(block)
+    up = [reflex.advance(0.05) for _ in range(8)]
+    assert up[:6] == pytest.approx([0.25, 0.30, 0.35, 0.40, 0.45, 0.50]) and up[6:] == [0.5, 0.5]
+    reflex.see(block * 0.5)  # 2 cm: below the 3 cm that counts as uneven
+    assert reflex.advance(0.05) == pytest.approx(0.45)
+    reflex.reset()
+    assert reflex.level == 0.2 and not reflex.uneven
+
+
+def test_a_zone_with_no_cell_on_the_map_is_refused():
+    with pytest.raises(ValueError, match="no height-map cell"):
+        LiftReflex(np.zeros((4, 4), dtype=bool), 0.03, 0.2, 0.5, 1.0, 1.0)
+
+
+def test_the_setting_is_refused_in_one_line_without_a_zone_or_with_a_zone_off_the_map():
+    with pytest.raises(ConfigError, match=r"task: lift_reflex .*lift_free_zone, which is null") as exc:
+        apply_overrides(Params(), ["task.lift_reflex=true", "task.lift_free_zone=null"])
+    assert "\n" not in str(exc.value)
+    with pytest.raises(ConfigError, match="lies outside the height map") as exc:
+        apply_overrides(Params(), ["task.lift_reflex=true", "sensors.heightmap_ahead=[0.8, 2.0]"])
+    assert "\n" not in str(exc.value)
+    assert apply_overrides(Params(), ["task.lift_reflex=true"]).task.lift_reflex
+
+
+def _walk(terrain: str, task: TaskConfig, seed: int = 0) -> tuple[dict, list[tuple[float, float, float]]]:
+    """A rollout of the held low gait: its last info and (base x, b, lift) at every step."""
+    env = HexapodEnv(terrain, cpg=CpgConfig().holding(LOW_GAIT), initial_cpg=LOW_GAIT, task=task)
+    env.reset(seed=seed)
+    trace = []
+    try:
+        while True:
+            _, _, terminated, truncated, info = env.step(np.zeros(3))
+            trace.append((float(env.robot.base_state()[0][0]), float(info["cpg"][1]), info["lift"]))
+            if terminated or truncated:
+                return info, trace
+    finally:
+        env.close()
+
+
+def test_the_reflex_carries_the_low_gait_over_the_block_it_stops_without_one():
+    """The premise says the 0.10 m block stops b = 0.15; with the reflex the same gait (b never changes) lifts
+    from about 0.7 m before the face and crosses. A blind policy's env: only the reflex reads the height map."""
+    info, trace = _walk("single_block", REFLEX)
+    assert info["termination"] == "goal"
+    assert all(b == pytest.approx(LOW_GAIT[1]) for _, b, _ in trace)  # the policy's b is untouched
+    assert all(lift == pytest.approx(0.15) for x, _, lift in trace if x < 0.2)  # open ground: the gait's own lift
+    assert max(lift for x, _, lift in trace if 0.3 < x < 1.0) == pytest.approx(0.5)  # b's ceiling before the face
+    assert all(lift == pytest.approx(0.15) for x, _, lift in trace if x > 2.4)  # the block well behind: down again
+
+
+def test_the_reflex_never_lifts_on_flat_ground():
+    info, trace = _walk("flat", REFLEX)
+    assert info["termination"] == "goal"
+    assert all(lift == pytest.approx(0.15) for _, _, lift in trace)
+
+
+def test_the_reflex_reads_the_map_without_putting_it_in_a_blind_observation():
+    env = HexapodEnv("single_block", task=REFLEX)
+    obs, _ = env.reset(seed=0)
+    assert set(obs) == {"body", "cpg"} and env.observation_space.contains(obs)
+    env.close()
