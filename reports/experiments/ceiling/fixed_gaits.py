@@ -6,7 +6,8 @@
 Each GAIT is a,b,omega (rad, rad, rad/s), held for the whole episode (evaluate's `best_fixed` controller); the
 episodes are evaluate's (seeds eval.seed onwards), so a gait's row is what `best_fixed` would score with it. The
 CPG's ceiling is raised to b 0.8 at run time (`cpg.upper`) so gaits above today's 0.5 can be held at all. Prints
-success per gait and terrain, and on flat ground the cost of transport and time to goal (s) of the successes.
+success per gait and terrain, the cost of transport of the successes per gait and terrain, and on flat ground
+their time to goal (s).
 """
 
 from __future__ import annotations
@@ -58,6 +59,10 @@ def main() -> None:
     with pd.option_context("display.width", 250):
         print(f"success over {a.episodes} episodes a terrain (seeds from eval.seed)")
         print(frame.pivot_table(index="gait", columns="terrain", values="success", sort=False).round(2).to_string())
+        arrived = frame[frame.success]
+        print("\ncost of transport of the successes")
+        print(arrived.pivot_table(index="gait", columns="terrain", values="cost_of_transport", sort=False).round(2)
+              .to_string())
         flat = frame[(frame.terrain == "flat") & frame.success]
         if len(flat):
             print("\nflat ground, successes: cost of transport and time to goal (s)")
