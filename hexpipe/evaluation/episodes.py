@@ -94,7 +94,8 @@ def lift_before_and_away(trace: np.ndarray, obstacles: list[tuple[float, float]]
     """Mean lift (rad; b, or the lift reflex's when higher) over the steps in the BEFORE_FACE before a block and
     over the steps on open ground; NaN where there were none (no block, or stuck before reaching the window).
 
-    An adaptive gait lifts its feet before blocks and lowers them elsewhere; a fixed gait has the same b in both.
+    An adaptive gait lifts its feet before blocks and lowers them elsewhere; a fixed gait without the lift reflex has
+    the same lift in both.
     """
     x, b = trace[:, TRACE_COLUMNS.index("distance")], trace[:, TRACE_COLUMNS.index("lift")]
     before, near = np.zeros(len(x), dtype=bool), np.zeros(len(x), dtype=bool)
