@@ -228,13 +228,27 @@ class TaskConfig(_Section):
     # map shows the terrain in lift_free_zone rising or falling by more than 3 cm, and back to b's floor elsewhere;
     # the policy's b is untouched, the reflex only raises the swing (hexpipe/sim/lift_reflex.py; the `reflex` sweep)
     lift_reflex: bool = False
+    # minus this much reward per rad the policy's b falls short of that reflex's lift, each control step: the reflex
+    # as a teacher of where to lift, not a leg mover (that is lift_reflex); a training signal only, since evaluate
+    # scores gaits, not rewards, so the policy walks without it (the `teacher` sweep); 0 = off
+    lift_teacher: Annotated[float, Field(ge=0)] = 0.0
     randomization: RandomizationConfig = RandomizationConfig()
 
     @model_validator(mode="after")
     def _reflex_has_a_zone(self) -> TaskConfig:
-        if self.lift_reflex and self.lift_free_zone is None:
-            raise ValueError("lift_reflex reads the terrain in lift_free_zone, which is null; set it, e.g. [0.6, 0.7]")
+        if self.reads_reflex and self.lift_free_zone is None:
+            raise ValueError(f"{self._reflex_key} reads the terrain in lift_free_zone, which is null; set it, e.g. "
+                             "[0.6, 0.7]")
         return self
+
+    @property
+    def reads_reflex(self) -> bool:
+        """Whether the env runs the lift reflex: to move the legs (lift_reflex) or to teach (lift_teacher)."""
+        return self.lift_reflex or self.lift_teacher > 0
+
+    @property
+    def _reflex_key(self) -> str:
+        return "lift_reflex" if self.lift_reflex else "lift_teacher"
 
 
 class CollectConfig(_Section):
@@ -457,10 +471,10 @@ class Params(_Section):
     @model_validator(mode="after")
     def _reflex_zone_on_the_map(self) -> Params:
         """task.lift_reflex reads task.lift_free_zone off the height map: the map must hold part of the zone."""
-        if self.task.lift_reflex and not reflex_zone(self.sensors, self.task).any():
+        if self.task.reads_reflex and not reflex_zone(self.sensors, self.task).any():
             raise ValueError(f"task.lift_free_zone {list(self.task.lift_free_zone)} lies outside the height map "
-                             f"(sensors.heightmap_ahead {list(self.sensors.heightmap_ahead)}): lift_reflex sees none "
-                             "of it")
+                             f"(sensors.heightmap_ahead {list(self.sensors.heightmap_ahead)}): "
+                             f"{self.task._reflex_key} sees none of it")
         return self
 
 

@@ -1,4 +1,5 @@
-"""The lift reflex (task.lift_reflex): its zone on the height map, its ramp, and what it does to a low gait."""
+"""The lift reflex (task.lift_reflex): its zone on the height map, its ramp, and what it does to a low gait; and the
+same reflex as a teacher (task.lift_teacher), which prices b's shortfall below it and moves no leg."""
 
 import math
 
@@ -7,10 +8,12 @@ import pytest
 
 from hexpipe.config import ConfigError, CpgConfig, Params, SensorConfig, TaskConfig, apply_overrides, reflex_zone
 from hexpipe.envs.hexapod import HexapodEnv
+from hexpipe.envs.rewards import lift_shortfall_penalty
 from hexpipe.sim.lift_reflex import LiftReflex, map_relief, ramp_toward, zone_mask
 
 LOW_GAIT = (0.25, 0.15, 1.5 * math.pi)  # stopped by the 0.10 m block (tests/test_env.py, the premise)
 REFLEX = TaskConfig(sensors=(), lift_reflex=True)  # a blind policy: only the reflex reads the map
+TEACHER = TaskConfig(sensors=(), lift_teacher=30.0)
 
 
 def test_the_zone_is_the_cells_from_behind_the_hind_feet_to_ahead_of_the_front_feet_across_the_legs():
@@ -106,3 +109,50 @@ def test_the_reflex_reads_the_map_without_putting_it_in_a_blind_observation():
     obs, _ = env.reset(seed=0)
     assert set(obs) == {"body", "cpg"} and env.observation_space.contains(obs)
     env.close()
+
+
+def test_the_teacher_charges_only_the_shortfall_below_the_reflexs_lift():
+    assert lift_shortfall_penalty(0.2, 0.5, 30.0) == pytest.approx(-9.0)
+    assert lift_shortfall_penalty(0.5, 0.5, 30.0) == 0.0
+    assert lift_shortfall_penalty(0.45, 0.3, 30.0) == 0.0  # above the reflex: the lift price's business, not this
+    assert lift_shortfall_penalty(0.2, 0.5, 0.0) == 0.0
+
+
+def test_the_teacher_is_refused_in_one_line_without_a_zone_and_named():
+    with pytest.raises(ConfigError, match=r"task: lift_teacher .*lift_free_zone, which is null") as exc:
+        apply_overrides(Params(), ["task.lift_teacher=30", "task.lift_free_zone=null"])
+    assert "\n" not in str(exc.value)
+    with pytest.raises(ConfigError, match="lift_teacher sees none of it"):
+        apply_overrides(Params(), ["task.lift_teacher=30", "sensors.heightmap_ahead=[0.8, 2.0]"])
+    with pytest.raises(ConfigError, match="lift_teacher"):
+        apply_overrides(Params(), ["task.lift_teacher=-1"])
+
+
+def test_the_teacher_asks_for_a_lift_before_the_block_and_moves_no_leg():
+    """The held low gait under the teacher: nothing charged on open ground, the shortfall charged before the face,
+    the legs at the gait's own lift throughout, so the block stops it as it does without the teacher."""
+    env = HexapodEnv("single_block", cpg=CpgConfig().holding(LOW_GAIT), initial_cpg=LOW_GAIT, task=TEACHER)
+    env.reset(seed=0)
+    steps = []
+    try:
+        while True:
+            _, reward, terminated, truncated, info = env.step(np.zeros(3))
+            terms = info["reward_terms"]
+            assert reward == pytest.approx(sum(terms.values()))
+            steps.append((float(env.robot.base_state()[0][0]), terms["teacher"], info["lift"]))
+            if terminated or truncated:
+                break
+    finally:
+        env.close()
+    assert info["termination"] != "goal"
+    assert all(lift == pytest.approx(LOW_GAIT[1]) for _, _, lift in steps)
+    assert all(t == 0.0 for x, t, _ in steps if x < 0.2)
+    assert min(t for x, t, _ in steps if x > 0.3) == pytest.approx(-30.0 * (0.5 - LOW_GAIT[1]))
+
+
+def test_runs_without_the_teacher_log_the_terms_they_always_did():
+    env = HexapodEnv("flat", task=TaskConfig(sensors=()))
+    env.reset(seed=0)
+    _, _, _, _, info = env.step(np.zeros(3))
+    env.close()
+    assert set(info["reward_terms"]) == {"forward", "power", "lift", "failure"}

@@ -13,10 +13,13 @@ Observation (Dict):
 Action: Box [-1, 1]^3, scaled by `CpgConfig.accel_limit` to d^2/dt^2 (a, b, omega), or with `action_order: 1` by
 `CpgConfig.rate_limit` to d/dt (a, b, omega). With `TaskConfig.lift_reflex` the legs swing at least as high as a
 reflex that reads the height map (hexpipe/sim/lift_reflex.py); `info["lift"]` is the front legs' lift (rad).
+With `TaskConfig.lift_teacher` the same reflex runs without moving a leg, and the reward charges b's shortfall
+below its lift.
 Reward: `reward_scale` * forward velocity (m/s, displacement over the control step), as in the paper, minus
 `power_cost` * mean mechanical joint power (W) when that is set (0 is the paper's reward), minus `lift_cost` * the lift
 b above its floor (rad) when that is set (waived near uneven terrain with `lift_free_zone`), minus `failure_penalty`
-once when the episode ends stuck or fallen.
+once when the episode ends stuck or fallen, minus `lift_teacher` * b's shortfall below the reflex's lift when that
+is set.
 Terminates on `goal` (3 m forward), `stuck` (too little progress over a window), `fall` (tilt or base too low)
 or `nonfinite` physics; truncates at the time limit. `info` carries distance, success, termination and the
 reward terms.
@@ -42,6 +45,7 @@ from hexpipe.envs.rewards import (
     failure_penalty,
     forward_velocity_reward,
     lift_penalty,
+    lift_shortfall_penalty,
     lift_waived,
     power_penalty,
 )
@@ -135,7 +139,7 @@ class HexapodEnv(gym.Env):
                       if self.cpg_cfg.lift_follows else None)
         self.reflex = (LiftReflex(reflex_zone(self.sensor_cfg, self.task), RELIEF_M, self.cpg_cfg.lower[1],
                                   self.cpg_cfg.upper[1], self.cpg_cfg.rate_limit[1], self.cpg_cfg.falling_limit[1])
-                       if self.task.lift_reflex else None)
+                       if self.task.reads_reflex else None)  # moves the legs only with task.lift_reflex
         self._readers: dict[str, Callable[[registry.SimView], np.ndarray]] = {}  # made on first use
         self.lift_cost_share = 1.0  # of task.lift_cost charged now: train-ppo's ppo.lift_cost_ramp lowers it
 
@@ -232,7 +236,8 @@ class HexapodEnv(gym.Env):
             floor = self.trail.floor(x)
         if self.reflex is not None:  # ramped over this control step from what the last height map showed
             lift = self.reflex.advance(self.control_dt)
-            floor = np.full(len(self.robot_spec.legs), lift) if floor is None else np.maximum(floor, lift)
+            if self.task.lift_reflex:
+                floor = np.full(len(self.robot_spec.legs), lift) if floor is None else np.maximum(floor, lift)
         xy = self.cpg.advance(command, self.physics_dt, self.substeps, floor)
         targets = slew_path(self._targets, self.gait.joint_targets(xy), self._max_joint_step)
         self._targets = targets[-1]
@@ -271,12 +276,16 @@ class HexapodEnv(gym.Env):
         """The named reward terms of one control step: dx (m forward), power (W, mean mechanical joint power), how
         the step ended the episode, if it did, and whether the terrain around the body waives the lift price."""
         lift_cost = 0.0 if lift_free else self.task.lift_cost * self.lift_cost_share
-        return {
+        b = float(self.cpg.params[1])
+        terms = {
             "forward": forward_velocity_reward(dx, self.control_dt, self.task.reward_scale),
             "power": power_penalty(power, self.task.power_cost),
-            "lift": lift_penalty(float(self.cpg.params[1]), self.cpg_cfg.lower[1], lift_cost),
+            "lift": lift_penalty(b, self.cpg_cfg.lower[1], lift_cost),
             "failure": failure_penalty(termination, self.task.failure_penalty),
         }
+        if self.task.lift_teacher > 0:  # only then, so that runs without it log the same terms as before
+            terms["teacher"] = lift_shortfall_penalty(b, self.reflex.level, self.task.lift_teacher)
+        return terms
 
     def _lift_free(self, pos: np.ndarray, quat: np.ndarray) -> bool:
         """Whether task.lift_free_zone waives the lift price this step: the terrain from `behind` m behind the body
@@ -423,7 +432,7 @@ class HexapodEnv(gym.Env):
         """The lift the front legs swing with now (rad): b, or the lift reflex's when that is higher (the middle
         and hind legs may swing higher still, following the leader with `cpg.lift_follows`)."""
         b = float(self.cpg.params[1])
-        return b if self.reflex is None else max(b, self.reflex.level)
+        return max(b, self.reflex.level) if self.task.lift_reflex else b
 
     def set_lift_cost_share(self, share: float) -> None:
         """Charge `share` (in [0, 1]) of task.lift_cost from the next step: train-ppo ramps the price in with it."""

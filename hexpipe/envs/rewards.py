@@ -30,6 +30,17 @@ def lift_penalty(b_rad: float, floor_rad: float, cost: float) -> float:
     return -cost * max(0.0, b_rad - floor_rad)
 
 
+def lift_shortfall_penalty(b_rad: float, reflex_rad: float, cost: float) -> float:
+    """Minus `cost` reward per rad the CPG's lift b falls short of the lift reflex's (task.lift_teacher), each
+    control step.
+
+    The reflex lifts to b's ceiling only where the height map shows relief ahead or under the feet, so this is 0 on
+    level ground (where the lift price pushes b down) and asks for a lift at faces: a dense signal for what a sparse
+    crossing reward teaches slowly, from the same map the policy sees.
+    """
+    return -cost * max(0.0, reflex_rad - b_rad)
+
+
 RELIEF_M = 0.03  # m of rise or fall within the lift-free zone (task.lift_free_zone) that waives the lift price
 
 
