@@ -221,7 +221,8 @@ def adaptation_text(table: Table, learned: str) -> str:
     lines = []
     if "lift_before_face" in numbers:
         lines.append(
-            f"- Adaptation, on single_block: mean b {numbers['b_before_face']:.2f} rad in the {BEFORE_FACE} m before "
+            f"- Adaptation, on single_block: mean swing lift (b, or the lift reflex's where higher) "
+            f"{numbers['b_before_face']:.2f} rad in the {BEFORE_FACE} m before "
             f"the face, {numbers['b_open']:.2f} rad on open ground: difference {numbers['lift_before_face']:+.2f} rad "
             f"(target >= +{ADAPTATION_TARGET:.2f}): {_mark(bool(numbers['lift_target_met']))}.")
     else:
