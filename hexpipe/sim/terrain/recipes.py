@@ -271,6 +271,9 @@ SCENARIOS: dict[str, TerrainRecipe] = {
     "stairs": TerrainRecipe(name="stairs", stairs=StairsSpec()),
     # A training distribution: blocks of every height, depth, count and position, rough and flat episodes.
     "varied": TerrainRecipe(name="varied", varied=VariedSpec()),
+    # `varied` with more open ground (flat 0.4, rough 0.1, blocks 0.5): the lift price is charged on 0.54 of the
+    # course instead of 0.29, so walking high everywhere costs something (reports/experiments/README.md, `open`).
+    "varied_open": TerrainRecipe(name="varied_open", varied=VariedSpec(blocks=0.5, rough=0.1, flat=0.4)),
     # Unseen layouts of the evaluation suite (the fixed-gait checks behind each: benchmarks/suite_check.py).
     # The highest block the best fixed gait (a = 0.4, b = 0.5, omega = 1.5 pi) crosses every time; 0.14 m stops it.
     "tall_block": TerrainRecipe(name="tall_block", boxes=(_block_spec(1.0, 0.3, 0.12),)),

@@ -2,7 +2,7 @@
 (no relief over 3 cm from 0.6 m behind to 0.7 m ahead of the base, the reward's own test) and so where the lift
 reflex, and with it task.lift_teacher, asks for b's floor.
 
-    .venv/bin/python reports/experiments/open/open_ground.py varied reports/experiments/open/varied_open.yaml
+    .venv/bin/python reports/experiments/open/open_ground.py varied varied_open   # or a terrain file
 
 Draws 2000 courses per terrain at difficulty 0.7 (about where the curriculum ends in 120k steps) from one seeded
 generator and samples the base's x every 5 cm over the 3 m from the start (x = 0) to the goal, on the centre line.
