@@ -1,6 +1,7 @@
 """Per terrain, how many of a condition's trials beat their fixed gait (evaluate's verdict: success within 5
 points, no slower and cheaper), and the mean over trials of the policy minus the fixed gait in success, time to
-goal (s) and cost of transport (those two over the trials with successes on both sides).
+goal (s) and cost of transport (those two over the trials with successes on both sides); then each trial's count
+of terrains beaten (`verdict/policy/terrains_beaten`).
 
     .venv/bin/python reports/experiments/open/verdict_terrains.py reports/sweeps/open open_teacher
 """
@@ -19,11 +20,12 @@ def _mean(stats: dict, key: str) -> float:
 
 
 sweep, condition = Path(sys.argv[1]), sys.argv[2]
-rows = []
+rows, trials = [], []
 for path in sorted(sweep.glob(f"{condition}-seed*/eval/metrics.json")):
     metrics = json.loads(path.read_text())
     for terrain in [k for k, v in metrics.items() if isinstance(v, dict) and "policy" in v]:
         policy, fixed = metrics[terrain]["policy"], metrics[terrain]["best_fixed"]
+        trials.append(path.parent.parent.name)
         rows.append(
             {
                 "terrain": terrain,
@@ -46,3 +48,5 @@ table = (
 )
 print(f"{condition} minus its fixed gait, mean over trials ({sweep})")
 print(table.to_string(float_format=lambda v: f"{v:+.2f}"))
+beaten = pd.DataFrame(rows).assign(trial=trials).groupby("trial", sort=False)["beaten"].sum()
+print("terrains beaten per trial: " + ", ".join(f"{trial} {count}" for trial, count in beaten.items()))
