@@ -230,8 +230,8 @@ class TaskConfig(_Section):
     lift_reflex: bool = False
     # minus this much reward per rad the policy's b falls short of that reflex's lift, each control step: the reflex
     # as a teacher of where to lift, not a leg mover (that is lift_reflex); a training signal only, since evaluate
-    # scores gaits, not rewards, so the policy walks without it (the `teacher` sweep); 0 = off
-    lift_teacher: Annotated[float, Field(ge=0)] = 0.0
+    # scores gaits, not rewards, so the policy walks without it (the `teacher` and `open` sweeps); 0 = off
+    lift_teacher: Annotated[float, Field(ge=0)] = 30.0
     randomization: RandomizationConfig = RandomizationConfig()
 
     @model_validator(mode="after")
@@ -331,9 +331,10 @@ class PpoConfig(_Section):
     sde_sample_freq: Annotated[int, Field(ge=-1)] = -1
     seed: int = 0
     blind: bool = False  # drop the terrain embedding (ablation)
-    # `varied` (issue 10): blocks of every height, depth, count and place, flat and rough episodes; the paper
+    # `varied_open` (issue 10): `varied`'s blocks of every height, depth, count and place with more flat and rough
+    # episodes, so that the lift price and the teacher have open ground to act on (the `open` sweep); the paper
     # trained on single_block alone (set train_terrains: [single_block], randomize: false, curriculum: false)
-    train_terrains: tuple[str, ...] = ("varied",)
+    train_terrains: tuple[str, ...] = ("varied_open",)
     randomize: bool = True  # draw friction and base mass from task.randomization at every reset
     # legged_gym's terrain curriculum: each env starts at difficulty 0 and is promoted when it completes its course,
     # demoted when it walks less than half of it (hexpipe/rl/curriculum.py); only `varied` terrains use the level
