@@ -151,7 +151,7 @@ def test_the_teacher_asks_for_a_lift_before_the_block_and_moves_no_leg():
 
 
 def test_runs_without_the_teacher_log_the_terms_they_always_did():
-    env = HexapodEnv("flat", task=TaskConfig(sensors=()))
+    env = HexapodEnv("flat", task=TaskConfig(sensors=(), lift_teacher=0.0))  # the teacher is on by default
     env.reset(seed=0)
     _, _, _, _, info = env.step(np.zeros(3))
     env.close()

@@ -83,8 +83,8 @@ def test_contacts_and_reward_terms_are_logged(tmp_path: Path) -> None:
     assert counts["/contacts"] == counts["/step"] == 5 and counts["/heightmap"] == 5
     frames = list(iter_frames(tmp_path / "ep.mcap", ("contacts",)))
     assert np.array_equal(frames[-1].sensors["contacts"], last)
-    # after reset: every term, at 0
-    assert frames[0].meta["reward_terms"] == {"forward": 0.0, "power": 0.0, "lift": 0.0, "failure": 0.0}
+    # after reset: every term, at 0 (the lift teacher is on by default, so its term is logged too)
+    assert frames[0].meta["reward_terms"] == {"forward": 0.0, "power": 0.0, "lift": 0.0, "failure": 0.0, "teacher": 0.0}
     terms = frames[-1].meta["reward_terms"]
     assert terms == pytest.approx(info["reward_terms"]) and terms["power"] < 0
     assert sum(terms.values()) == pytest.approx(frames[-1].meta["reward"])
