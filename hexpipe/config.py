@@ -337,8 +337,7 @@ class PpoConfig(_Section):
     train_terrains: tuple[str, ...] = ("varied_open",)
     randomize: bool = True  # draw friction and base mass from task.randomization at every reset
     # legged_gym's terrain curriculum: each env starts at difficulty 0 and is promoted when it completes its course,
-    # demoted when it walks less than half of it (hexpipe/rl/curriculum.py); only terrains with a `varied` section
-    # (`varied`, `varied_open`, a file with one) use the level
+    # demoted when it walks less than half of it (hexpipe/rl/curriculum.py); only `varied` terrains use the level
     curriculum: bool = True
     # an asymmetric critic: the value network also sees the true terrain profile and the randomised physics
     # (hexpipe/envs/privileged.py); the actor, and so the exported policy, keeps its inputs
