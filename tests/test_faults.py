@@ -264,6 +264,13 @@ def test_unwritable_output_folders_fail_before_any_work(tmp_path):
         assert f"{blocker}/" in line and "cannot write outputs here" in line, line
 
 
+def test_an_unknown_training_terrain_is_one_line_before_any_worker_starts(tmp_path):
+    args = ["train-ppo", "--set", "ppo.blind=true", "--set", "ppo.train_terrains=[varied_opn]",
+            "--set", f"ppo.out_dir={tmp_path}/ppo", "--set", f"ppo.report_dir={tmp_path}/reports"]
+    line = one_line_error(runner.invoke(app, args))
+    assert "unknown terrain 'varied_opn'" in line and "varied_open" in line, line
+
+
 def test_train_vae_reads_only_the_manifest_episodes(tmp_path):
     out = tmp_path / "rollouts"
     collect(tiny_collect(out, episodes=2), say=lambda _: None)

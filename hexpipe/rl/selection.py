@@ -141,8 +141,11 @@ def train_policy(params: Params, resume: bool = False, show_progress: bool = Tru
     Returns the chosen run's metrics (train_ppo's) plus `selection/chosen_seed` and `selection/validation_return`;
     `finished` is true when no candidate took a step now."""
     from hexpipe.rl.train import POLICY_CONFIG, train_ppo
+    from hexpipe.sim.terrain import load_terrain
 
     cfg = params.ppo
+    for terrain in dict.fromkeys(cfg.train_terrains):  # a bad name or file: one TerrainError now, not one per worker
+        load_terrain(terrain)
     seeds = candidate_seeds(cfg.seed, cfg.candidates)
     _prune(cfg, seeds)
     runs: list[dict[str, Any]] = []
