@@ -221,6 +221,10 @@ class TaskConfig(_Section):
     # minus this much reward once when an episode ends stuck or fallen: with a high power price, giving up at the
     # block face otherwise pays better than a slow, costly climb (reports/experiments/README.md, "price"); 0 = off
     failure_penalty: Annotated[float, Field(ge=0)] = 1000.0
+    # minus this much reward per s of episode time, charged each control step: the paper's reward pays per metre, so
+    # its undiscounted sum is the same for a slow and a fast crossing and only the discount asks for speed; this
+    # prices time as the verdict scores it (issue 10, the `time` sweep); 0 = off
+    time_cost: Annotated[float, Field(ge=0)] = 0.0
     # the observation's `body` starts with x, y relative to the start (the paper's state); false drops them, so the
     # policy must find the block with its terrain sensor instead of memorising where it was (body: 13 -> 11 numbers)
     observe_position: bool = False

@@ -53,3 +53,33 @@ def test_a_ramp_is_nothing_before_its_start_linear_between_and_whole_after_its_e
     from hexpipe.envs.rewards import ramp
 
     assert [ramp(s, 100, 300) for s in (0, 100, 150, 300, 1000)] == [0.0, 0.0, 0.25, 1.0, 1.0]
+
+
+def test_time_penalty_is_the_price_per_second_times_the_step():
+    from hexpipe.envs.rewards import time_penalty
+
+    assert time_penalty(0.05, 50.0) == pytest.approx(-2.5)  # 50 per s over a 20 Hz control step
+    assert time_penalty(0.10, 50.0) == pytest.approx(2 * time_penalty(0.05, 50.0))
+    assert time_penalty(0.05, 0.0) == 0.0  # 0: off, the paper's reward
+
+
+def test_the_time_price_is_charged_every_step_and_logged_only_when_set():
+    import numpy as np
+
+    from hexpipe.config import TaskConfig
+    from hexpipe.envs.hexapod import HexapodEnv
+
+    charged = HexapodEnv("flat", task=TaskConfig(sensors=(), time_cost=50.0))
+    free = HexapodEnv("flat", task=TaskConfig(sensors=()))
+    try:
+        charged.reset(seed=0)
+        free.reset(seed=0)
+        for _ in range(3):
+            _, r_charged, _, _, info = charged.step(np.zeros(3))
+            _, r_free, _, _, free_info = free.step(np.zeros(3))
+            assert info["reward_terms"]["time"] == pytest.approx(-50.0 * charged.control_dt)
+            assert r_charged == pytest.approx(r_free - 50.0 * charged.control_dt)  # the same step, one more term
+        assert "time" not in free_info["reward_terms"]
+    finally:
+        charged.close()
+        free.close()

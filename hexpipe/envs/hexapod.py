@@ -19,7 +19,7 @@ Reward: `reward_scale` * forward velocity (m/s, displacement over the control st
 `power_cost` * mean mechanical joint power (W) when that is set (0 is the paper's reward), minus `lift_cost` * the lift
 b above its floor (rad) when that is set (waived near uneven terrain with `lift_free_zone`), minus `failure_penalty`
 once when the episode ends stuck or fallen, minus `lift_teacher` * b's shortfall below the reflex's lift when that
-is set.
+is set, minus `time_cost` per s of episode time when that is set.
 Terminates on `goal` (3 m forward), `stuck` (too little progress over a window), `fall` (tilt or base too low)
 or `nonfinite` physics; truncates at the time limit. `info` carries distance, success, termination and the
 reward terms.
@@ -48,6 +48,7 @@ from hexpipe.envs.rewards import (
     lift_shortfall_penalty,
     lift_waived,
     power_penalty,
+    time_penalty,
 )
 from hexpipe.envs.state import WORLD_FRAME, EnvScene, EnvState
 from hexpipe.sensors.heightmap import HEADING_FRAME, quat_to_yaw, reference_height
@@ -285,6 +286,8 @@ class HexapodEnv(gym.Env):
         }
         if self.task.lift_teacher > 0:  # only then, so that runs without it log the same terms as before
             terms["teacher"] = lift_shortfall_penalty(b, self.reflex.level, self.task.lift_teacher)
+        if self.task.time_cost > 0:  # as the teacher: runs without it log the terms they always did
+            terms["time"] = time_penalty(self.control_dt, self.task.time_cost)
         return terms
 
     def _lift_free(self, pos: np.ndarray, quat: np.ndarray) -> bool:

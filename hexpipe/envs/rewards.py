@@ -41,6 +41,17 @@ def lift_shortfall_penalty(b_rad: float, reflex_rad: float, cost: float) -> floa
     return -cost * max(0.0, reflex_rad - b_rad)
 
 
+def time_penalty(dt: float, cost: float) -> float:
+    """Minus `cost` reward per s of episode time, for a control step of `dt` s.
+
+    The forward reward pays scale * dx / dt per step, so an episode's undiscounted sum is scale * distance / dt
+    whatever its speed: on flat ground a fixed gait at a 0.3 rad earns what one at 0.4 does, 3 s later, for the same
+    energy. Only the discount asks for speed. A price per second makes a slower crossing cost what it costs in the
+    evaluation's time to goal.
+    """
+    return -cost * dt
+
+
 RELIEF_M = 0.03  # m of rise or fall within the lift-free zone (task.lift_free_zone) that waives the lift price
 
 
