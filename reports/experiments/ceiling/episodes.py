@@ -30,6 +30,15 @@ def checked_inputs(overrides: Sequence[str], terrains: Sequence[str] = (), polic
     return params
 
 
+def parse_gait(text: str) -> tuple[float, float, float]:
+    """A gait given on the command line as a,b,omega (rad, rad, rad/s); one line naming the text if it is not."""
+    try:
+        a, b, omega = (float(v) for v in text.split(","))
+    except ValueError:
+        raise SystemExit(f"error: gait {text!r} is not a,b,omega (three numbers)") from None
+    return a, b, omega
+
+
 def evaluate_episode(controller: ControllerSpec, terrain: str, index: int, overrides: Sequence[str],
                      on_step: Callable[..., None] | None = None) -> dict[str, Any]:
     """Evaluate's episode `index` of `terrain` for the controller: its results row."""

@@ -16,7 +16,7 @@ import argparse
 from concurrent.futures import ProcessPoolExecutor
 
 import pandas as pd
-from episodes import checked_inputs, evaluate_episode  # the helper beside this script
+from episodes import checked_inputs, evaluate_episode, parse_gait  # the helper beside this script
 
 from hexpipe.evaluation.controllers import ControllerSpec
 
@@ -33,14 +33,6 @@ def _one(job: tuple[tuple[float, float, float], str, int, tuple[str, ...]]) -> d
             "cost_of_transport": row["cost_of_transport"], "time": row["time"]}
 
 
-def _gait(text: str) -> tuple[float, float, float]:
-    try:
-        a, b, omega = (float(v) for v in text.split(","))
-    except ValueError:
-        raise SystemExit(f"error: gait {text!r} is not a,b,omega (three numbers)") from None
-    return a, b, omega
-
-
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("gaits", nargs="+", metavar="A,B,OMEGA")
@@ -49,7 +41,7 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--set", dest="overrides", action="append", default=[], metavar="SECTION.KEY=VALUE")
     a = ap.parse_args()
-    gaits = [_gait(g) for g in a.gaits]
+    gaits = [parse_gait(g) for g in a.gaits]
     terrains = a.terrains.split(",")
     overrides = (RAISED, *a.overrides)
     checked_inputs(overrides, terrains)

@@ -20,7 +20,7 @@ from pathlib import Path
 import pandas as pd
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "ceiling"))
-from episodes import checked_inputs, evaluate_episode  # the helper in ../ceiling
+from episodes import checked_inputs, evaluate_episode, parse_gait  # the helper in ../ceiling
 
 from hexpipe.evaluation.controllers import ControllerSpec
 
@@ -41,14 +41,6 @@ def _one(job: tuple[tuple[float, float, float], str, int, tuple[str, ...]]) -> d
             "steps": steps[0] - 1, **sums}
 
 
-def _gait(text: str) -> tuple[float, float, float]:
-    try:
-        a, b, omega = (float(v) for v in text.split(","))
-    except ValueError:
-        raise SystemExit(f"error: gait {text!r} is not a,b,omega (three numbers)") from None
-    return a, b, omega
-
-
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("gaits", nargs="+", metavar="A,B,OMEGA")
@@ -57,7 +49,7 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--set", dest="overrides", action="append", default=[], metavar="SECTION.KEY=VALUE")
     a = ap.parse_args()
-    gaits = [_gait(g) for g in a.gaits]
+    gaits = [parse_gait(g) for g in a.gaits]
     terrains = a.terrains.split(",")
     checked_inputs(a.overrides, terrains)
     jobs = [(g, t, i, tuple(a.overrides)) for g in gaits for t in terrains for i in range(a.episodes)]
