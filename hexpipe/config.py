@@ -236,12 +236,17 @@ class TaskConfig(_Section):
     # as a teacher of where to lift, not a leg mover (that is lift_reflex); a training signal only, since evaluate
     # scores gaits, not rewards, so the policy walks without it (the `teacher` and `open` sweeps); 0 = off
     lift_teacher: Annotated[float, Field(ge=0)] = 30.0
+    # minus this much reward per rad the CPG's stride a strays from a stride reflex that reads the height map: a's
+    # ceiling (cpg.upper), ramping to a's floor (cpg.lower) while the map shows two separate regions raised more than
+    # 5 cm within lift_free_zone, the straddle of two blocks that a long stride fails (hexpipe/sim/stride_reflex.py;
+    # the `straddle` sweep). A training signal only, as lift_teacher; 0 = off
+    stride_teacher: Annotated[float, Field(ge=0)] = 0.0
     randomization: RandomizationConfig = RandomizationConfig()
 
     @model_validator(mode="after")
     def _reflex_has_a_zone(self) -> TaskConfig:
-        if self.reads_reflex and self.lift_free_zone is None:
-            raise ValueError(f"{self._reflex_key} reads the terrain in lift_free_zone, which is null; set it, e.g. "
+        if self.reads_zone and self.lift_free_zone is None:
+            raise ValueError(f"{self._zone_readers('read')} the terrain in lift_free_zone, which is null; set it, e.g. "
                              "[0.6, 0.7]")
         return self
 
@@ -251,8 +256,15 @@ class TaskConfig(_Section):
         return self.lift_reflex or self.lift_teacher > 0
 
     @property
-    def _reflex_key(self) -> str:
-        return "lift_reflex" if self.lift_reflex else "lift_teacher"
+    def reads_zone(self) -> bool:
+        """Whether a reflex reads lift_free_zone off the height map: the lift reflex or the stride teacher."""
+        return self.reads_reflex or self.stride_teacher > 0
+
+    def _zone_readers(self, verb: str) -> str:
+        """The settings on that read the zone, with `verb` agreeing, to name in errors: "lift_teacher reads"."""
+        keys = [k for k, on in (("lift_reflex", self.lift_reflex), ("lift_teacher", self.lift_teacher > 0),
+                                ("stride_teacher", self.stride_teacher > 0)) if on]
+        return f"{' and '.join(keys)} {verb}{'s' if len(keys) == 1 else ''}"
 
 
 class CollectConfig(_Section):
@@ -476,10 +488,18 @@ class Params(_Section):
     @model_validator(mode="after")
     def _reflex_zone_on_the_map(self) -> Params:
         """task.lift_reflex reads task.lift_free_zone off the height map: the map must hold part of the zone."""
-        if self.task.reads_reflex and not reflex_zone(self.sensors, self.task).any():
+        if self.task.reads_zone and not reflex_zone(self.sensors, self.task).any():
             raise ValueError(f"task.lift_free_zone {list(self.task.lift_free_zone)} lies outside the height map "
                              f"(sensors.heightmap_ahead {list(self.sensors.heightmap_ahead)}): "
-                             f"{self.task._reflex_key} sees none of it")
+                             f"{self.task._zone_readers('see')} none of it")
+        return self
+
+    @model_validator(mode="after")
+    def _stride_teacher_has_a_range(self) -> Params:
+        """task.stride_teacher asks for cpg.lower's a at a straddle and cpg.upper's elsewhere: they must differ."""
+        if self.task.stride_teacher > 0 and not self.cpg.lower[0] < self.cpg.upper[0]:
+            raise ValueError(f"task.stride_teacher asks for cpg.lower's a ({self.cpg.lower[0]}) at a straddle and "
+                             f"cpg.upper's a ({self.cpg.upper[0]}) elsewhere; set the floor below the ceiling")
         return self
 
 

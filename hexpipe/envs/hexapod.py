@@ -14,12 +14,14 @@ Action: Box [-1, 1]^3, scaled by `CpgConfig.accel_limit` to d^2/dt^2 (a, b, omeg
 `CpgConfig.rate_limit` to d/dt (a, b, omega). With `TaskConfig.lift_reflex` the legs swing at least as high as a
 reflex that reads the height map (hexpipe/sim/lift_reflex.py); `info["lift"]` is the front legs' lift (rad).
 With `TaskConfig.lift_teacher` the same reflex runs without moving a leg, and the reward charges b's shortfall
-below its lift.
+below its lift. With `TaskConfig.stride_teacher` a stride reflex (hexpipe/sim/stride_reflex.py) reads the same map,
+and the reward charges a's distance from its stride.
 Reward: `reward_scale` * forward velocity (m/s, displacement over the control step), as in the paper, minus
 `power_cost` * mean mechanical joint power (W) when that is set (0 is the paper's reward), minus `lift_cost` * the lift
 b above its floor (rad) when that is set (waived near uneven terrain with `lift_free_zone`), minus `failure_penalty`
 once when the episode ends stuck or fallen, minus `lift_teacher` * b's shortfall below the reflex's lift when that
-is set, minus `time_cost` per s of episode time when that is set.
+is set, minus `stride_teacher` * a's distance from the stride reflex's when that is set, minus `time_cost` per s
+of episode time when that is set.
 Terminates on `goal` (3 m forward), `stuck` (too little progress over a window), `fall` (tilt or base too low)
 or `nonfinite` physics; truncates at the time limit. `info` carries distance, success, termination and the
 reward terms.
@@ -48,6 +50,7 @@ from hexpipe.envs.rewards import (
     lift_shortfall_penalty,
     lift_waived,
     power_penalty,
+    stride_deviation_penalty,
     time_penalty,
 )
 from hexpipe.envs.state import WORLD_FRAME, EnvScene, EnvState
@@ -57,6 +60,7 @@ from hexpipe.sim.gait import GaitMap, slew_path
 from hexpipe.sim.lift_reflex import LiftReflex
 from hexpipe.sim.lift_trail import LiftTrail, foot_lags
 from hexpipe.sim.robot import Robot, RobotSpec, robot_shapes
+from hexpipe.sim.stride_reflex import StrideReflex
 from hexpipe.sim.terrain import Terrain, TerrainRecipe, build_terrain, load_terrain, realize
 
 
@@ -141,6 +145,9 @@ class HexapodEnv(gym.Env):
         self.reflex = (LiftReflex(reflex_zone(self.sensor_cfg, self.task), RELIEF_M, self.cpg_cfg.lower[1],
                                   self.cpg_cfg.upper[1], self.cpg_cfg.rate_limit[1], self.cpg_cfg.falling_limit[1])
                        if self.task.reads_reflex else None)  # moves the legs only with task.lift_reflex
+        self.stride = (StrideReflex(reflex_zone(self.sensor_cfg, self.task), self.cpg_cfg.lower[0],
+                                    self.cpg_cfg.upper[0], self.cpg_cfg.rate_limit[0], self.cpg_cfg.falling_limit[0])
+                       if self.task.stride_teacher > 0 else None)  # teaches only: moves no leg
         self._readers: dict[str, Callable[[registry.SimView], np.ndarray]] = {}  # made on first use
         self.lift_cost_share = 1.0  # of task.lift_cost charged now: train-ppo's ppo.lift_cost_ramp lowers it
 
@@ -148,8 +155,9 @@ class HexapodEnv(gym.Env):
         self.observation_space = observation_space(self.cpg_cfg, self.sensor_cfg, self.task, privileged)
         self._observed = list(self.task.sensors)
         # what one observation reads: the observed sensors, and the height map for the privileged profile and the
-        # lift reflex (which reads it whether or not the policy does)
-        needs_map = (privileged or self.reflex is not None) and "heightmap" not in self._observed
+        # reflexes (which read it whether or not the policy does)
+        reflexes = self.reflex is not None or self.stride is not None
+        needs_map = (privileged or reflexes) and "heightmap" not in self._observed
         self._sensed = self._observed + (["heightmap"] if needs_map else [])
         self._physics = (self.sim_cfg.friction, 1.0)  # (friction, base-mass scale) drawn at reset
         self._corridor = corridor_columns(self.sensor_cfg) if privileged else None
@@ -200,6 +208,8 @@ class HexapodEnv(gym.Env):
             self.trail.reset()
         if self.reflex is not None:
             self.reflex.reset()
+        if self.stride is not None:
+            self.stride.reset()
         ground = float(self.terrain.height_at(np.zeros(1), np.zeros(1))[0])
         start = (0.0, 0.0, ground + self.sim_cfg.body_height + 0.01)
         self.robot = Robot(c, self.robot_spec, start)
@@ -239,6 +249,8 @@ class HexapodEnv(gym.Env):
             lift = self.reflex.advance(self.control_dt)
             if self.task.lift_reflex:
                 floor = np.full(len(self.robot_spec.legs), lift) if floor is None else np.maximum(floor, lift)
+        if self.stride is not None:  # as the lift reflex: ramped from what the last height map showed
+            self.stride.advance(self.control_dt)
         xy = self.cpg.advance(command, self.physics_dt, self.substeps, floor)
         targets = slew_path(self._targets, self.gait.joint_targets(xy), self._max_joint_step)
         self._targets = targets[-1]
@@ -286,6 +298,9 @@ class HexapodEnv(gym.Env):
         }
         if self.task.lift_teacher > 0:  # only then, so that runs without it log the same terms as before
             terms["teacher"] = lift_shortfall_penalty(b, self.reflex.level, self.task.lift_teacher)
+        if self.stride is not None:  # as the lift teacher
+            terms["stride"] = stride_deviation_penalty(float(self.cpg.params[0]), self.stride.level,
+                                                       self.task.stride_teacher)
         if self.task.time_cost > 0:  # as the teacher: runs without it log the terms they always did
             terms["time"] = time_penalty(self.control_dt, self.task.time_cost)
         return terms
@@ -327,6 +342,8 @@ class HexapodEnv(gym.Env):
         sensed = self.sense(self._sensed, base=(pos, quat))
         if self.reflex is not None:
             self.reflex.see(sensed["heightmap"])
+        if self.stride is not None:
+            self.stride.see(sensed["heightmap"])
         for name in self._observed:
             obs[name] = registry.get(name).observation(sensed[name])
         if self.privileged:

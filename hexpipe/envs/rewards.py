@@ -41,13 +41,24 @@ def lift_shortfall_penalty(b_rad: float, reflex_rad: float, cost: float) -> floa
     return -cost * max(0.0, reflex_rad - b_rad)
 
 
+def stride_deviation_penalty(a_rad: float, reflex_rad: float, cost: float) -> float:
+    """Minus `cost` reward per rad the CPG's stride a lies from the stride reflex's (task.stride_teacher), each
+    control step.
+
+    Both ways: the reflex asks for the long stride on open ground and at single faces, where it is faster, and for
+    the short one only at a straddle of two blocks, which the long stride fails (hexpipe/sim/stride_reflex.py).
+    """
+    return -cost * abs(a_rad - reflex_rad)
+
+
 def time_penalty(dt: float, cost: float) -> float:
     """Minus `cost` reward per s of episode time, for a control step of `dt` s.
 
     The forward reward pays scale * dx / dt per step, so an episode's undiscounted sum is scale * distance / dt
-    whatever its speed: on flat ground a fixed gait at a 0.3 rad earns what one at 0.4 does, 3 s later, for the same
-    energy. Only the discount asks for speed. A price per second makes a slower crossing cost what it costs in the
-    evaluation's time to goal.
+    whatever its speed: on flat ground a fixed gait at a 0.3 rad earns what one at 0.4 does, 3 s later, for about
+    the same energy (cost of transport 1.06 against 1.02: reports/experiments/time/return_terms.txt). Only the
+    discount asks for speed. A price per second makes a slower crossing cost what it costs in the evaluation's time
+    to goal.
     """
     return -cost * dt
 

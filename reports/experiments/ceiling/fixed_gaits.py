@@ -6,8 +6,8 @@
 Each GAIT is a,b,omega (rad, rad, rad/s), held for the whole episode (evaluate's `best_fixed` controller); the
 episodes are evaluate's (seeds eval.seed onwards), so a gait's row is what `best_fixed` would score with it. The
 CPG's ceiling is raised to b 0.8 at run time (`cpg.upper`) so gaits above today's 0.5 can be held at all. Prints
-success per gait and terrain, the cost of transport of the successes per gait and terrain, and on flat ground
-their time to goal (s).
+success per gait and terrain, the cost of transport and the time to goal (s) of the successes per gait and terrain,
+and on flat ground both averaged per gait.
 """
 
 from __future__ import annotations
@@ -55,6 +55,8 @@ def main() -> None:
         print("\ncost of transport of the successes")
         print(arrived.pivot_table(index="gait", columns="terrain", values="cost_of_transport", sort=False).round(2)
               .to_string())
+        print("\ntime to goal of the successes (s)")
+        print(arrived.pivot_table(index="gait", columns="terrain", values="time", sort=False).round(2).to_string())
         flat = frame[(frame.terrain == "flat") & frame.success]
         if len(flat):
             print("\nflat ground, successes: cost of transport and time to goal (s)")

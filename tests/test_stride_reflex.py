@@ -1,0 +1,114 @@
+"""The stride reflex (task.stride_teacher): what counts as a straddle on the height map, its ramp, and the teacher
+in the env, which prices a's distance from the reflex's stride and moves no leg."""
+
+import numpy as np
+import pytest
+
+from hexpipe.config import ConfigError, CpgConfig, Params, TaskConfig, apply_overrides
+from hexpipe.envs.hexapod import HexapodEnv
+from hexpipe.envs.rewards import stride_deviation_penalty
+from hexpipe.sim.lift_reflex import zone_mask
+from hexpipe.sim.stride_reflex import StrideReflex, raised_regions
+
+MASK = zone_mask(-0.6, 1.4, 32, 32, 1.6, behind=0.6, ahead=0.7)  # the default map and zone: rows 0-20
+GAIT = (0.4, 0.5, 3.141593)  # the fixed gait's stride and cycle at b's ceiling
+BOUNDS = CpgConfig(lower=(0.35, 0.2, 3.141593), upper=(0.4, 0.5, 3.141593), initial=GAIT)  # a free in [0.35, 0.4]
+TEACHER = TaskConfig(sensors=(), stride_teacher=100.0)  # a blind policy: only the reflex reads the map
+
+
+def _map(*blocks: tuple[int, int, float]) -> np.ndarray:
+    """A level map 0.37 m below the reference with a block across every column for each (first row, end row, m)."""
+    heights = np.full((32, 32), -0.37, dtype=np.float32)
+    for first, end, height in blocks:
+        heights[first:end, :] += height
+    return heights
+
+
+def test_a_straddle_is_two_raised_regions_inside_the_zone():
+    assert raised_regions(_map(), MASK) == 0
+    assert raised_regions(_map((4, 9, 0.10)), MASK) == 1
+    assert raised_regions(_map((4, 9, 0.10), (16, 21, 0.10)), MASK) == 2
+    assert raised_regions(_map((4, 9, 0.10), (24, 29, 0.10)), MASK) == 1  # the second block beyond the zone
+    assert raised_regions(_map((4, 9, 0.10), (16, 21, 0.04)), MASK) == 1  # 4 cm: a bump, not a block
+    assert raised_regions(_map((0, 21, 0.10)), MASK) == 0  # standing on one long block: level under the zone
+    assert raised_regions(_map((4, 21, 0.06), (8, 12, 0.06)), MASK) == 1  # a step on a step: one raised run
+
+
+def test_the_reflex_ramps_at_as_own_rates_to_the_short_stride_at_a_straddle_only():
+    reflex = StrideReflex(MASK, short=0.35, long=0.4, rise=1.0, fall=0.5)
+    reflex.see(_map((4, 9, 0.10)))
+    assert [reflex.advance(0.05) for _ in range(2)] == [0.4, 0.4]  # one face: the long stride
+    reflex.see(_map((4, 9, 0.10), (16, 21, 0.10)))
+    down = [reflex.advance(0.05) for _ in range(3)]
+    assert down == pytest.approx([0.375, 0.35, 0.35])  # at the fall rate, 0.5 rad/s
+    reflex.see(_map())
+    assert reflex.advance(0.02) == pytest.approx(0.37)  # back up at the rise rate, 1 rad/s
+    reflex.reset()
+    assert reflex.level == 0.4 and not reflex.straddle
+    with pytest.raises(ValueError, match="no height-map cell"):
+        StrideReflex(np.zeros((4, 4), dtype=bool), 0.35, 0.4, 1.0, 1.0)
+
+
+def test_the_teacher_charges_as_distance_from_the_reflex_both_ways():
+    assert stride_deviation_penalty(0.4, 0.35, 100.0) == pytest.approx(-5.0)
+    assert stride_deviation_penalty(0.35, 0.4, 100.0) == pytest.approx(-5.0)
+    assert stride_deviation_penalty(0.38, 0.38, 100.0) == 0.0
+    assert stride_deviation_penalty(0.35, 0.4, 0.0) == 0.0
+
+
+def _walk(terrain: str) -> tuple[dict, list[tuple[float, float, float]]]:
+    """The held long gait under the stride teacher: its last info and (base x, a, stride term) at every step."""
+    env = HexapodEnv(terrain, cpg=BOUNDS, initial_cpg=GAIT, task=TEACHER)
+    env.reset(seed=0)
+    trace = []
+    try:
+        while True:
+            _, reward, terminated, truncated, info = env.step(np.zeros(3))
+            terms = info["reward_terms"]
+            assert reward == pytest.approx(sum(terms.values()))
+            trace.append((float(env.robot.base_state()[0][0]), float(info["cpg"][0]), terms["stride"]))
+            if terminated or truncated:
+                return info, trace
+    finally:
+        env.close()
+
+
+def test_the_teacher_asks_for_the_short_stride_between_extra_blocks_and_moves_no_leg():
+    """Extra blocks' faces are at 1.0 m and 2.0 m, 0.3 m deep: both lie within the zone (0.6 m behind the base to
+    0.7 m ahead) while the base is between 1.3 m and 1.9 m. The held gait's a never changes."""
+    info, trace = _walk("extra_blocks")
+    assert info["termination"] == "goal"
+    assert all(a == pytest.approx(GAIT[0]) for _, a, _ in trace)
+    assert all(term == 0.0 for x, _, term in trace if x < 1.2 or x > 2.1)
+    assert min(term for x, _, term in trace if 1.4 < x < 1.8) == pytest.approx(-100.0 * 0.05)
+
+
+def test_the_teacher_never_asks_for_a_short_stride_at_one_block():
+    info, trace = _walk("single_block")
+    assert info["termination"] == "goal"
+    assert all(term == 0.0 for _, _, term in trace)
+
+
+def test_the_stride_teacher_is_refused_in_one_line_when_it_cannot_teach():
+    both = r"task: lift_teacher and stride_teacher read the terrain in lift_free_zone, which is null"
+    with pytest.raises(ConfigError, match=both) as exc:
+        apply_overrides(Params(), ["task.stride_teacher=100", "task.lift_free_zone=null"])
+    assert "\n" not in str(exc.value)
+    with pytest.raises(ConfigError, match=r"stride_teacher .*cpg.lower's a .*cpg.upper's a") as exc:
+        apply_overrides(Params(), ["task.stride_teacher=100", "cpg.lower=[0.4,0.2,1.0]", "cpg.upper=[0.4,0.5,6.0]",
+                                   "cpg.initial=[0.4,0.2,4.0]"])
+    assert "\n" not in str(exc.value)
+    with pytest.raises(ConfigError, match="stride_teacher"):
+        apply_overrides(Params(), ["task.stride_teacher=-1"])
+    with pytest.raises(ConfigError, match="stride_teacher sees none of it"):
+        apply_overrides(Params(), ["task.lift_teacher=0", "task.stride_teacher=100",
+                                   "sensors.heightmap_ahead=[0.8, 2.0]"])
+    assert apply_overrides(Params(), ["task.stride_teacher=100"]).task.stride_teacher == 100.0
+
+
+def test_runs_without_the_stride_teacher_log_no_stride_term():
+    env = HexapodEnv("flat", task=TaskConfig(sensors=()))
+    env.reset(seed=0)
+    _, _, _, _, info = env.step(np.zeros(3))
+    env.close()
+    assert "stride" not in info["reward_terms"]
