@@ -1,6 +1,7 @@
 """Where on a terrain a condition's policies lose time to their fixed gait: the mean time (s) to cross each 0.25 m
-of forward distance, and the mean lift b (rad) there, for the policy and `best_fixed`, over the episodes that
-reached the goal in every trial of the condition (from each trial's eval/cpg_traces.csv.gz under data/sweeps).
+of forward distance, and the mean lift b and stride a (rad) there, for the policy and `best_fixed`, over the
+episodes that reached the goal in every trial of the condition (from each trial's eval/cpg_traces.csv.gz under
+data/sweeps).
 
     .venv/bin/python reports/experiments/pinned/segments.py data/sweeps/pinned pinned wide_block rough
 
@@ -18,12 +19,13 @@ STEP = 0.25  # m of forward distance per segment
 
 
 def segments(trace: pd.DataFrame, goal: float = 3.0) -> list[dict]:
-    """One row per segment of one episode's trace: the time (s) to cross it and the mean b (rad) on it."""
-    d, t, b = trace.distance.to_numpy(), trace.time.to_numpy(), trace.b.to_numpy()
+    """One row per segment of one episode's trace: the time (s) to cross it and the mean b and a (rad) on it."""
+    d, t, b, a = (trace[k].to_numpy() for k in ("distance", "time", "b", "a"))
     rows = []
     for lo in np.arange(0.0, goal, STEP):
         first, last = int(np.argmax(d >= lo)), int(np.argmax(d >= min(lo + STEP, d.max())))
-        rows.append({"from_m": round(lo, 2), "time_s": t[last] - t[first], "b": b[first : last + 1].mean()})
+        rows.append({"from_m": round(lo, 2), "time_s": t[last] - t[first], "b": b[first : last + 1].mean(),
+                     "a": a[first : last + 1].mean()})
     return rows
 
 
