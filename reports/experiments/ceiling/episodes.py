@@ -51,3 +51,17 @@ def policy_episode(policy: str, terrain: str, index: int, overrides: Sequence[st
     """(success, distance in m) of evaluate's episode `index` of `terrain` for the policy in `policy`."""
     row = evaluate_episode(ControllerSpec("policy", policy), terrain, index, overrides)
     return bool(row["success"]), float(row["distance"])
+
+
+def print_arms(policies: Sequence[str], arms: Sequence[str], episodes: int, outcomes: Sequence[tuple[bool, float]],
+               policy_width: int = 40, arm_width: int = 21) -> None:
+    """A table of run-time interventions: a header, then per policy its successes in each arm and the distances (m)
+    at which the failures stopped. `outcomes` are (success, distance) per episode, ordered policy, arm, episode."""
+    print(f"{'policy':<{policy_width}} " + "  ".join(f"{arm:>{arm_width}}" for arm in arms)
+          + "   failures (m), per arm")
+    out = iter(outcomes)
+    for policy in policies:
+        runs = [[next(out) for _ in range(episodes)] for _ in arms]
+        counts = "  ".join(f"{sum(ok for ok, _ in r):>{arm_width - 3}}/{episodes:<2}" for r in runs)
+        fails = " | ".join(" ".join(f"{d:.2f}" for ok, d in r if not ok) or "-" for r in runs)
+        print(f"{policy:<{policy_width}} {counts}   {fails}")

@@ -24,7 +24,7 @@ import argparse
 from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
-from episodes import checked_inputs, policy_episode  # the helper beside this script
+from episodes import checked_inputs, policy_episode, print_arms  # the helper beside this script
 
 from hexpipe.envs import hexapod
 from hexpipe.envs.rewards import lift_waived
@@ -91,16 +91,10 @@ def main() -> None:
     else:
         print(f"{a.terrain}, {a.episodes} episodes; from {a.start} m on: b driven to its ceiling "
               f"({params.cpg.upper[1]} rad), omega steered to {a.omega:.3f} rad/s in the last arm")
-    print(f"{'policy':<40} " + "  ".join(f"{arm:>21}" for arm in arms) + "   failures (m), per arm")
     jobs = [(p, a.terrain, i, arm, a.start, a.omega, tuple(a.overrides)) for p in a.policies for arm in arms
             for i in range(a.episodes)]
     with ProcessPoolExecutor(a.workers) as pool:
-        out = iter(list(pool.map(_one, jobs)))
-    for policy in a.policies:
-        runs = [[next(out) for _ in range(a.episodes)] for _ in arms]
-        counts = "  ".join(f"{sum(ok for ok, _ in r):>18}/{a.episodes:<2}" for r in runs)
-        fails = " | ".join(" ".join(f"{d:.2f}" for ok, d in r if not ok) or "-" for r in runs)
-        print(f"{policy:<40} {counts}   {fails}")
+        print_arms(a.policies, arms, a.episodes, list(pool.map(_one, jobs)))
 
 
 if __name__ == "__main__":

@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "ceiling"))
-from episodes import checked_inputs, policy_episode  # the helper in ../ceiling
+from episodes import checked_inputs, policy_episode, print_arms  # the helper in ../ceiling
 
 from hexpipe.envs import hexapod
 
@@ -59,15 +59,9 @@ def main() -> None:
                          "task.stride_teacher=100")
     print(f"{a.terrain}, {a.episodes} episodes; a steered to the stride reflex's ({params.cpg.lower[0]} rad at a "
           f"straddle, {params.cpg.upper[0]} elsewhere)")
-    print(f"{'policy':<44} " + "  ".join(f"{arm:>23}" for arm in ARMS) + "   failures (m), per arm")
     jobs = [(p, a.terrain, i, arm, tuple(a.overrides)) for p in a.policies for arm in ARMS for i in range(a.episodes)]
     with ProcessPoolExecutor(a.workers) as pool:
-        out = iter(list(pool.map(_one, jobs)))
-    for policy in a.policies:
-        runs = [[next(out) for _ in range(a.episodes)] for _ in ARMS]
-        counts = "  ".join(f"{sum(ok for ok, _ in r):>20}/{a.episodes:<2}" for r in runs)
-        fails = " | ".join(" ".join(f"{d:.2f}" for ok, d in r if not ok) or "-" for r in runs)
-        print(f"{policy:<44} {counts}   {fails}")
+        print_arms(a.policies, list(ARMS), a.episodes, list(pool.map(_one, jobs)), policy_width=44, arm_width=23)
 
 
 if __name__ == "__main__":
