@@ -241,6 +241,11 @@ class TaskConfig(_Section):
     # 5 cm within lift_free_zone, the straddle of two blocks that a long stride fails (hexpipe/sim/stride_reflex.py;
     # the `straddle` sweep). A training signal only, as lift_teacher; 0 = off
     stride_teacher: Annotated[float, Field(ge=0)] = 0.0
+    # the stride (rad) every leg swings with at most while that stride reflex sees a straddle: the reflex as a leg
+    # mover, ramping a cap on the legs' stride from cpg.upper's a down to this and back, at a's rate bounds; the
+    # policy's a is untouched (and with stride_teacher on too, the teacher asks for this stride). A structural
+    # reflex, as lift_reflex is for b, since the teacher did not teach it (the `straddle` sweep); 0 = off
+    stride_reflex: Annotated[float, Field(ge=0)] = 0.0
     randomization: RandomizationConfig = RandomizationConfig()
 
     @model_validator(mode="after")
@@ -256,14 +261,20 @@ class TaskConfig(_Section):
         return self.lift_reflex or self.lift_teacher > 0
 
     @property
+    def reads_stride(self) -> bool:
+        """Whether the env runs the stride reflex: to move the legs (stride_reflex) or to teach (stride_teacher)."""
+        return self.stride_reflex > 0 or self.stride_teacher > 0
+
+    @property
     def reads_zone(self) -> bool:
-        """Whether a reflex reads lift_free_zone off the height map: the lift reflex or the stride teacher."""
-        return self.reads_reflex or self.stride_teacher > 0
+        """Whether a reflex reads lift_free_zone off the height map: the lift or the stride reflex."""
+        return self.reads_reflex or self.reads_stride
 
     def _zone_readers(self, verb: str) -> str:
         """The settings on that read the zone, with `verb` agreeing, to name in errors: "lift_teacher reads"."""
         keys = [k for k, on in (("lift_reflex", self.lift_reflex), ("lift_teacher", self.lift_teacher > 0),
-                                ("stride_teacher", self.stride_teacher > 0)) if on]
+                                ("stride_teacher", self.stride_teacher > 0),
+                                ("stride_reflex", self.stride_reflex > 0)) if on]
         return f"{' and '.join(keys)} {verb}{'s' if len(keys) == 1 else ''}"
 
 
@@ -487,7 +498,8 @@ class Params(_Section):
 
     @model_validator(mode="after")
     def _reflex_zone_on_the_map(self) -> Params:
-        """task.lift_reflex reads task.lift_free_zone off the height map: the map must hold part of the zone."""
+        """The reflexes (task.lift_reflex, lift_teacher, stride_teacher, stride_reflex) read task.lift_free_zone off
+        the height map: the map must hold part of the zone."""
         if self.task.reads_zone and not reflex_zone(self.sensors, self.task).any():
             raise ValueError(f"task.lift_free_zone {list(self.task.lift_free_zone)} lies outside the height map "
                              f"(sensors.heightmap_ahead {list(self.sensors.heightmap_ahead)}): "
@@ -495,17 +507,21 @@ class Params(_Section):
         return self
 
     @model_validator(mode="after")
-    def _stride_teacher_has_a_range(self) -> Params:
-        """task.stride_teacher asks for cpg.lower's a at a straddle and cpg.upper's elsewhere: they must differ."""
-        if self.task.stride_teacher > 0 and not self.cpg.lower[0] < self.cpg.upper[0]:
+    def _stride_reflex_has_a_range(self) -> Params:
+        """The stride reflex ramps from cpg.upper's a to a shorter stride at a straddle: task.stride_reflex when on,
+        else (the teacher alone) cpg.lower's a."""
+        if self.task.stride_reflex > 0 and not self.task.stride_reflex < self.cpg.upper[0]:
+            raise ValueError(f"task.stride_reflex ({self.task.stride_reflex}) is the stride at a straddle and must "
+                             f"be shorter than cpg.upper's a ({self.cpg.upper[0]}), the stride elsewhere")
+        if self.task.stride_teacher > 0 and self.task.stride_reflex == 0 and not self.cpg.lower[0] < self.cpg.upper[0]:
             raise ValueError(f"task.stride_teacher asks for cpg.lower's a ({self.cpg.lower[0]}) at a straddle and "
                              f"cpg.upper's a ({self.cpg.upper[0]}) elsewhere; set the floor below the ceiling")
         return self
 
 
 def reflex_zone(sensors: SensorConfig, task: TaskConfig) -> Any:
-    """The height-map cells the lift reflex reads ((rows, cols) bool; `hexpipe.sim.lift_reflex.zone_mask`)."""
-    from hexpipe.sim.lift_reflex import zone_mask
+    """The height-map cells the reflexes read ((rows, cols) bool; `hexpipe.sim.zone_reflex.zone_mask`)."""
+    from hexpipe.sim.zone_reflex import zone_mask
 
     near, far = sensors.heightmap_ahead
     behind, ahead = task.lift_free_zone

@@ -9,7 +9,8 @@ import pytest
 from hexpipe.config import ConfigError, CpgConfig, Params, SensorConfig, TaskConfig, apply_overrides, reflex_zone
 from hexpipe.envs.hexapod import HexapodEnv
 from hexpipe.envs.rewards import lift_shortfall_penalty
-from hexpipe.sim.lift_reflex import LiftReflex, map_relief, ramp_toward, zone_mask
+from hexpipe.sim.lift_reflex import lift_reflex, map_relief
+from hexpipe.sim.zone_reflex import ramp_toward, zone_mask
 
 LOW_GAIT = (0.25, 0.15, 1.5 * math.pi)  # stopped by the 0.10 m block (tests/test_env.py, the premise)
 REFLEX = TaskConfig(sensors=(), lift_reflex=True)  # a blind policy: only the reflex reads the map
@@ -43,7 +44,7 @@ def test_the_reflex_ramps_at_bs_own_rates_toward_the_ceiling_near_relief_and_the
     assert ramp_toward(0.48, 0.5, rise=1.0, fall=0.1, dt=0.05) == 0.5
     assert ramp_toward(0.5, 0.2, rise=1.0, fall=0.1, dt=0.05) == pytest.approx(0.495)
     mask = zone_mask(-0.6, 1.4, 32, 32, 1.6, behind=0.6, ahead=0.7)
-    reflex = LiftReflex(mask, relief=0.03, floor=0.2, ceiling=0.5, rise=1.0, fall=1.0)
+    reflex = lift_reflex(mask, relief=0.03, floor=0.2, ceiling=0.5, rise=1.0, fall=1.0)
     flat, block = np.zeros((32, 32)), np.zeros((32, 32))
     block[15:, :] = 0.04
     reflex.see(flat)
@@ -54,12 +55,12 @@ def test_the_reflex_ramps_at_bs_own_rates_toward_the_ceiling_near_relief_and_the
     reflex.see(block * 0.5)  # 2 cm: below the 3 cm that counts as uneven
     assert reflex.advance(0.05) == pytest.approx(0.45)
     reflex.reset()
-    assert reflex.level == 0.2 and not reflex.uneven
+    assert reflex.level == 0.2 and not reflex.triggered
 
 
 def test_a_zone_with_no_cell_on_the_map_is_refused():
     with pytest.raises(ValueError, match="no height-map cell"):
-        LiftReflex(np.zeros((4, 4), dtype=bool), 0.03, 0.2, 0.5, 1.0, 1.0)
+        lift_reflex(np.zeros((4, 4), dtype=bool), 0.03, 0.2, 0.5, 1.0, 1.0)
 
 
 def test_the_setting_is_refused_in_one_line_without_a_zone_or_with_a_zone_off_the_map():

@@ -1,5 +1,6 @@
-"""The stride reflex (task.stride_teacher): what counts as a straddle on the height map, its ramp, and the teacher
-in the env, which prices a's distance from the reflex's stride and moves no leg."""
+"""The stride reflex: what counts as a straddle on the height map, its ramp; the teacher in the env
+(task.stride_teacher), which prices a's distance from the reflex's stride and moves no leg; and the leg mover
+(task.stride_reflex), which caps the legs' stride at the straddle and leaves the policy's a alone."""
 
 import numpy as np
 import pytest
@@ -7,8 +8,9 @@ import pytest
 from hexpipe.config import ConfigError, CpgConfig, Params, TaskConfig, apply_overrides
 from hexpipe.envs.hexapod import HexapodEnv
 from hexpipe.envs.rewards import stride_deviation_penalty
-from hexpipe.sim.lift_reflex import zone_mask
-from hexpipe.sim.stride_reflex import StrideReflex, raised_regions
+from hexpipe.sim.cpg import CPG
+from hexpipe.sim.stride_reflex import raised_regions, stride_reflex
+from hexpipe.sim.zone_reflex import zone_mask
 
 MASK = zone_mask(-0.6, 1.4, 32, 32, 1.6, behind=0.6, ahead=0.7)  # the default map and zone: rows 0-20
 GAIT = (0.4, 0.5, 3.141593)  # the fixed gait's stride and cycle at b's ceiling
@@ -35,7 +37,7 @@ def test_a_straddle_is_two_raised_regions_inside_the_zone():
 
 
 def test_the_reflex_ramps_at_as_own_rates_to_the_short_stride_at_a_straddle_only():
-    reflex = StrideReflex(MASK, short=0.35, long=0.4, rise=1.0, fall=0.5)
+    reflex = stride_reflex(MASK, short=0.35, long=0.4, rise=1.0, fall=0.5)
     reflex.see(_map((4, 9, 0.10)))
     assert [reflex.advance(0.05) for _ in range(2)] == [0.4, 0.4]  # one face: the long stride
     reflex.see(_map((4, 9, 0.10), (16, 21, 0.10)))
@@ -44,9 +46,9 @@ def test_the_reflex_ramps_at_as_own_rates_to_the_short_stride_at_a_straddle_only
     reflex.see(_map())
     assert reflex.advance(0.02) == pytest.approx(0.37)  # back up at the rise rate, 1 rad/s
     reflex.reset()
-    assert reflex.level == 0.4 and not reflex.straddle
+    assert reflex.level == 0.4 and not reflex.triggered
     with pytest.raises(ValueError, match="no height-map cell"):
-        StrideReflex(np.zeros((4, 4), dtype=bool), 0.35, 0.4, 1.0, 1.0)
+        stride_reflex(np.zeros((4, 4), dtype=bool), 0.35, 0.4, 1.0, 1.0)
 
 
 def test_the_teacher_charges_as_distance_from_the_reflex_both_ways():
@@ -112,3 +114,69 @@ def test_runs_without_the_stride_teacher_log_no_stride_term():
     _, _, _, _, info = env.step(np.zeros(3))
     env.close()
     assert "stride" not in info["reward_terms"]
+
+
+REFLEX_GAIT = (0.4, 0.45, 3.141593)  # the fixed gait's stride and cycle at a lift that fails the straddle
+
+
+def _reflex_walk(terrain: str, cap: float, seed: int) -> tuple[dict, list[tuple[float, float]]]:
+    """The held gait (a 0.4, b 0.45) with the stride reflex at `cap` (0: off): its last info and (base x, the
+    legs' stride) at every step; the policy's a is checked to stay the gait's."""
+    task = TaskConfig(sensors=(), stride_reflex=cap)
+    env = HexapodEnv(terrain, cpg=CpgConfig().holding(REFLEX_GAIT), initial_cpg=REFLEX_GAIT, task=task)
+    env.reset(seed=seed)
+    trace = []
+    try:
+        while True:
+            _, _, terminated, truncated, info = env.step(np.zeros(3))
+            assert float(info["cpg"][0]) == pytest.approx(REFLEX_GAIT[0]) and "stride" not in info["reward_terms"]
+            trace.append((float(env.robot.base_state()[0][0]), info["stride"]))
+            if terminated or truncated:
+                return info, trace
+    finally:
+        env.close()
+
+
+def test_the_cpg_swings_the_legs_with_the_shorter_of_a_and_the_stride_cap():
+    cpg = CPG(CpgConfig().holding(REFLEX_GAIT), np.array([0, 1, 0, 1, 0, 1]))
+    cpg.reset(np.array(REFLEX_GAIT))
+    free, capped = CPG(cpg.cfg, np.array([0, 1, 0, 1, 0, 1])), cpg
+    free.reset(np.array(REFLEX_GAIT))
+    xy_free = free.advance(np.zeros(3), 0.01, 20)
+    xy_capped = capped.advance(np.zeros(3), 0.01, 20, stride_cap=0.35)
+    assert np.allclose(xy_capped[..., 0], xy_free[..., 0] * 0.35 / 0.4)  # the stride scaled, the phase the same
+    assert np.allclose(xy_capped[..., 1], xy_free[..., 1])  # the lift untouched
+    assert capped.params[0] == pytest.approx(0.4)  # the parameter itself is unchanged
+    assert np.allclose(free.advance(np.zeros(3), 0.01, 5), capped.advance(np.zeros(3), 0.01, 5, stride_cap=0.45))
+
+
+@pytest.mark.parametrize("seed", [5, 10])
+def test_the_stride_reflex_carries_the_long_stride_over_the_straddle_it_stalls_at_without_one(seed):
+    """The premise of task.stride_reflex: at a 0.4, b 0.45 the straddle of extra blocks stops the gait (base at
+    about 1.5 m) in 9 of 30 seeds (these two among them); the same gait, its stride capped at 0.35 only while both
+    blocks lie in the zone (base at 1.3-1.9 m), crosses."""
+    info, _ = _reflex_walk("extra_blocks", 0.0, seed)
+    assert info["termination"] == "stuck" and 1.3 < info["distance"] < 1.7
+    info, trace = _reflex_walk("extra_blocks", 0.35, seed)
+    assert info["termination"] == "goal"
+    assert all(stride == pytest.approx(0.4) for x, stride in trace if x < 1.2 or x > 2.1)
+    assert all(stride == pytest.approx(0.35) for x, stride in trace if 1.45 < x < 1.75)
+
+
+def test_the_stride_reflex_keeps_the_long_stride_at_one_block():
+    info, trace = _reflex_walk("single_block", 0.35, 0)
+    assert info["termination"] == "goal"
+    assert all(stride == pytest.approx(0.4) for _, stride in trace)
+
+
+def test_the_stride_reflex_is_refused_in_one_line_when_it_cannot_shorten_the_stride():
+    with pytest.raises(ConfigError, match=r"task.stride_reflex \(0.45\) .*shorter than cpg.upper's a \(0.4\)") as exc:
+        apply_overrides(Params(), ["task.stride_reflex=0.45"])
+    assert "\n" not in str(exc.value)
+    with pytest.raises(ConfigError, match=r"task: lift_teacher and stride_reflex read .*lift_free_zone, which is null"):
+        apply_overrides(Params(), ["task.stride_reflex=0.35", "task.lift_free_zone=null"])
+    with pytest.raises(ConfigError, match="stride_reflex"):
+        apply_overrides(Params(), ["task.stride_reflex=-0.1"])
+    # the short stride may lie below a's floor: the reflex moves the legs, not the policy's a
+    pinned = ["cpg.lower=[0.4,0.2,3.141593]", "cpg.upper=[0.4,0.5,3.141593]", "cpg.initial=[0.4,0.2,3.141593]"]
+    assert apply_overrides(Params(), ["task.stride_reflex=0.35", *pinned]).task.stride_reflex == 0.35

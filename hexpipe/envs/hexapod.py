@@ -15,7 +15,8 @@ Action: Box [-1, 1]^3, scaled by `CpgConfig.accel_limit` to d^2/dt^2 (a, b, omeg
 reflex that reads the height map (hexpipe/sim/lift_reflex.py); `info["lift"]` is the front legs' lift (rad).
 With `TaskConfig.lift_teacher` the same reflex runs without moving a leg, and the reward charges b's shortfall
 below its lift. With `TaskConfig.stride_teacher` a stride reflex (hexpipe/sim/stride_reflex.py) reads the same map,
-and the reward charges a's distance from its stride.
+and the reward charges a's distance from its stride; with `TaskConfig.stride_reflex` the legs swing with no longer
+a stride than that reflex's (a shorter one at the straddle of two blocks); `info["stride"]` is the stride (rad).
 Reward: `reward_scale` * forward velocity (m/s, displacement over the control step), as in the paper, minus
 `power_cost` * mean mechanical joint power (W) when that is set (0 is the paper's reward), minus `lift_cost` * the lift
 b above its floor (rad) when that is set (waived near uneven terrain with `lift_free_zone`), minus `failure_penalty`
@@ -57,10 +58,10 @@ from hexpipe.envs.state import WORLD_FRAME, EnvScene, EnvState
 from hexpipe.sensors.heightmap import HEADING_FRAME, quat_to_yaw, reference_height
 from hexpipe.sim.cpg import CPG
 from hexpipe.sim.gait import GaitMap, slew_path
-from hexpipe.sim.lift_reflex import LiftReflex
+from hexpipe.sim.lift_reflex import lift_reflex
 from hexpipe.sim.lift_trail import LiftTrail, foot_lags
 from hexpipe.sim.robot import Robot, RobotSpec, robot_shapes
-from hexpipe.sim.stride_reflex import StrideReflex
+from hexpipe.sim.stride_reflex import stride_reflex
 from hexpipe.sim.terrain import Terrain, TerrainRecipe, build_terrain, load_terrain, realize
 
 
@@ -142,12 +143,13 @@ class HexapodEnv(gym.Env):
         self.cpg = CPG(self.cpg_cfg, np.array([leg.tripod for leg in self.robot_spec.legs]))
         self.trail = (LiftTrail(foot_lags(self.robot_spec, self.sim_cfg.stance_reach), self.max_steps + 1)
                       if self.cpg_cfg.lift_follows else None)
-        self.reflex = (LiftReflex(reflex_zone(self.sensor_cfg, self.task), RELIEF_M, self.cpg_cfg.lower[1],
-                                  self.cpg_cfg.upper[1], self.cpg_cfg.rate_limit[1], self.cpg_cfg.falling_limit[1])
+        self.reflex = (lift_reflex(reflex_zone(self.sensor_cfg, self.task), RELIEF_M, self.cpg_cfg.lower[1],
+                                   self.cpg_cfg.upper[1], self.cpg_cfg.rate_limit[1], self.cpg_cfg.falling_limit[1])
                        if self.task.reads_reflex else None)  # moves the legs only with task.lift_reflex
-        self.stride = (StrideReflex(reflex_zone(self.sensor_cfg, self.task), self.cpg_cfg.lower[0],
-                                    self.cpg_cfg.upper[0], self.cpg_cfg.rate_limit[0], self.cpg_cfg.falling_limit[0])
-                       if self.task.stride_teacher > 0 else None)  # teaches only: moves no leg
+        short = self.task.stride_reflex or self.cpg_cfg.lower[0]  # the teacher alone asks for a's floor
+        self.stride_reflex = (stride_reflex(reflex_zone(self.sensor_cfg, self.task), short, self.cpg_cfg.upper[0],
+                                     self.cpg_cfg.rate_limit[0], self.cpg_cfg.falling_limit[0])
+                       if self.task.reads_stride else None)  # moves the legs only with task.stride_reflex
         self._readers: dict[str, Callable[[registry.SimView], np.ndarray]] = {}  # made on first use
         self.lift_cost_share = 1.0  # of task.lift_cost charged now: train-ppo's ppo.lift_cost_ramp lowers it
 
@@ -156,7 +158,7 @@ class HexapodEnv(gym.Env):
         self._observed = list(self.task.sensors)
         # what one observation reads: the observed sensors, and the height map for the privileged profile and the
         # reflexes (which read it whether or not the policy does)
-        reflexes = self.reflex is not None or self.stride is not None
+        reflexes = self.reflex is not None or self.stride_reflex is not None
         needs_map = (privileged or reflexes) and "heightmap" not in self._observed
         self._sensed = self._observed + (["heightmap"] if needs_map else [])
         self._physics = (self.sim_cfg.friction, 1.0)  # (friction, base-mass scale) drawn at reset
@@ -208,8 +210,8 @@ class HexapodEnv(gym.Env):
             self.trail.reset()
         if self.reflex is not None:
             self.reflex.reset()
-        if self.stride is not None:
-            self.stride.reset()
+        if self.stride_reflex is not None:
+            self.stride_reflex.reset()
         ground = float(self.terrain.height_at(np.zeros(1), np.zeros(1))[0])
         start = (0.0, 0.0, ground + self.sim_cfg.body_height + 0.01)
         self.robot = Robot(c, self.robot_spec, start)
@@ -249,9 +251,11 @@ class HexapodEnv(gym.Env):
             lift = self.reflex.advance(self.control_dt)
             if self.task.lift_reflex:
                 floor = np.full(len(self.robot_spec.legs), lift) if floor is None else np.maximum(floor, lift)
-        if self.stride is not None:  # as the lift reflex: ramped from what the last height map showed
-            self.stride.advance(self.control_dt)
-        xy = self.cpg.advance(command, self.physics_dt, self.substeps, floor)
+        cap = None
+        if self.stride_reflex is not None:  # as the lift reflex: ramped from what the last height map showed
+            stride = self.stride_reflex.advance(self.control_dt)
+            cap = stride if self.task.stride_reflex > 0 else None
+        xy = self.cpg.advance(command, self.physics_dt, self.substeps, floor, cap)
         targets = slew_path(self._targets, self.gait.joint_targets(xy), self._max_joint_step)
         self._targets = targets[-1]
         self._xy = xy[-1]  # each leg's (x, y) now, with its lift floor (the recorder logs it)
@@ -298,8 +302,8 @@ class HexapodEnv(gym.Env):
         }
         if self.task.lift_teacher > 0:  # only then, so that runs without it log the same terms as before
             terms["teacher"] = lift_shortfall_penalty(b, self.reflex.level, self.task.lift_teacher)
-        if self.stride is not None:  # as the lift teacher
-            terms["stride"] = stride_deviation_penalty(float(self.cpg.params[0]), self.stride.level,
+        if self.task.stride_teacher > 0:  # as the lift teacher
+            terms["stride"] = stride_deviation_penalty(float(self.cpg.params[0]), self.stride_reflex.level,
                                                        self.task.stride_teacher)
         if self.task.time_cost > 0:  # as the teacher: runs without it log the terms they always did
             terms["time"] = time_penalty(self.control_dt, self.task.time_cost)
@@ -342,8 +346,8 @@ class HexapodEnv(gym.Env):
         sensed = self.sense(self._sensed, base=(pos, quat))
         if self.reflex is not None:
             self.reflex.see(sensed["heightmap"])
-        if self.stride is not None:
-            self.stride.see(sensed["heightmap"])
+        if self.stride_reflex is not None:
+            self.stride_reflex.see(sensed["heightmap"])
         for name in self._observed:
             obs[name] = registry.get(name).observation(sensed[name])
         if self.privileged:
@@ -385,6 +389,7 @@ class HexapodEnv(gym.Env):
             "time": self.steps * self.control_dt,
             "cpg": self.cpg.params.copy(),
             "lift": self.lift,
+            "stride": self.stride,
             "reward_terms": reward_terms,
             "power": power,  # W, mean mechanical joint power over the last control step
             "energy": self.energy,  # J since reset
@@ -453,6 +458,12 @@ class HexapodEnv(gym.Env):
         and hind legs may swing higher still, following the leader with `cpg.lift_follows`)."""
         b = float(self.cpg.params[1])
         return max(b, self.reflex.level) if self.task.lift_reflex else b
+
+    @property
+    def stride(self) -> float:
+        """The stride the legs swing with now (rad): a, or the stride reflex's when that is shorter."""
+        a = float(self.cpg.params[0])
+        return min(a, self.stride_reflex.level) if self.task.stride_reflex > 0 else a
 
     def set_lift_cost_share(self, share: float) -> None:
         """Charge `share` (in [0, 1]) of task.lift_cost from the next step: train-ppo ramps the price in with it."""

@@ -20,9 +20,10 @@ from hexpipe.evaluation.controllers import ControllerSpec, build, gait_label
 from hexpipe.evaluation.suite import Scenario
 
 StepHook = Callable[[HexapodEnv, float, dict[str, Any], bool], None]
-# s, m, rad, rad, rad/s, rad: the CPG parameters, then the lift the front legs swing with (b, or the lift reflex's
-# when that is higher: `HexapodEnv.lift`), which the lift statistics read
-TRACE_COLUMNS = ("time", "distance", "a", "b", "omega", "lift")
+# s, m, rad, rad, rad/s, rad, rad: the CPG parameters, then the lift the front legs swing with (b, or the lift
+# reflex's when that is higher: `HexapodEnv.lift`), which the lift statistics read, and the stride the legs swing with
+# (a, or the stride reflex's when that is shorter: `HexapodEnv.stride`)
+TRACE_COLUMNS = ("time", "distance", "a", "b", "omega", "lift", "stride")
 # The lift statistics, by the body's forward distance (m from the start). "Before the face": the last BEFORE_FACE
 # before a block's start, where an adaptive gait must be lifting (issue 10's adaptation measure). "Open ground":
 # farther than NEAR_BEFORE before any block (the front feet reach about FRONT_REACH ahead of the base and a policy
@@ -111,7 +112,7 @@ def _feet(env: HexapodEnv) -> np.ndarray:
 
 
 def _trace_row(info: dict[str, Any]) -> list[float]:
-    return [info["time"], info["distance"], *map(float, info["cpg"]), info["lift"]]
+    return [info["time"], info["distance"], *map(float, info["cpg"]), info["lift"], info["stride"]]
 
 
 def run_episode(params: Params, job: EpisodeJob, on_step: StepHook | None = None) -> EpisodeResult:

@@ -135,12 +135,16 @@ class CPG:
         self.params[1] = self.cfg.lower[1]
         self.rates[1] = 0.0
 
-    def advance(self, command: np.ndarray, dt: float, n: int, lift_floor: np.ndarray | None = None) -> np.ndarray:
+    def advance(
+        self, command: np.ndarray, dt: float, n: int, lift_floor: np.ndarray | None = None,
+        stride_cap: float | None = None,
+    ) -> np.ndarray:
         """Advance n substeps of dt (s) under a constant `command` (the parameters' second derivative, or their rate
         with cfg.action_order 1); returns (n, 6, 2) joint-space (x, y) (rad).
 
         lift_floor: optional (6,) lowest lift per leg (rad); a leg swings with the larger of it and b
-        (`hexpipe.sim.lift_trail`). The parameters themselves are unchanged.
+        (`hexpipe.sim.lift_trail`, the lift reflex). stride_cap: optional longest stride (rad); the legs swing with
+        the smaller of it and a (the stride reflex). The parameters themselves are unchanged.
         """
         values, rates = parameter_path(self.params, self.rates, command, dt, n, self.cfg)
         self.params, self.rates = values[-1].copy(), rates[-1].copy()
@@ -151,7 +155,8 @@ class CPG:
         z = np.exp(1j * dt * np.cumsum(values[:, 2]))[:, None] * w
         self.w = z[-1]
         lift = values[:, 1:2] if lift_floor is None else np.maximum(values[:, 1:2], lift_floor[None, :])
-        return np.stack([values[:, :1] * z.real, lift * z.imag], axis=-1)
+        stride = values[:, :1] if stride_cap is None else np.minimum(values[:, :1], stride_cap)
+        return np.stack([stride * z.real, lift * z.imag], axis=-1)
 
     def step(self, command: np.ndarray, dt: float) -> np.ndarray:
         """Advance one substep of dt (s); returns the joint-space (x, y) of every leg (rad)."""

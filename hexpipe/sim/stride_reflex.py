@@ -9,17 +9,21 @@ b 0.45-0.5 cross that course 20 of 20 times, at a 0.4 and b 0.45 only 9 of 20
 long stride wins at single faces, so this reflex asks for the short stride only where the map shows two separate
 raised regions in the zone (task.lift_free_zone, the feet's reach), and for the long one everywhere else.
 
-It only teaches (task.stride_teacher): the reward charges a's distance from the reflex's stride; no leg is moved.
-The target moves no faster than a itself may (cpg.rate_limit, cpg.fall_rate_limit), so the policy can follow it.
+Two uses. As a teacher (task.stride_teacher, the `straddle` sweep) the reward charges a's distance from the
+reflex's stride and no leg is moved: the policies kept the long stride at the straddle. Steered to the reflex's
+stride at run time, the same policies crossed extra blocks 50 of 50 (reports/experiments/straddle/stride_hold.txt),
+so as a leg mover (task.stride_reflex, the stride at a straddle) the reflex caps every leg's stride at its own
+while the policy's a is untouched, as the lift reflex raises the swing. Its stride moves no faster than a itself
+may (cpg.rate_limit, cpg.fall_rate_limit).
 
-Pure NumPy: the env hands it each control step's height map and asks for the stride once per control step.
+Pure NumPy, a `hexpipe.sim.zone_reflex.ZoneReflex` with this module's trigger.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from hexpipe.sim.lift_reflex import ramp_toward
+from hexpipe.sim.zone_reflex import ZoneReflex
 
 RISE_M = 0.05  # m above the zone's lowest row that counts as raised: half the paper's 0.10 m block, above most of
 # rough ground's bumps (0-0.07 m), so a low bump pair rarely reads as two blocks
@@ -36,27 +40,9 @@ def raised_regions(heightmap: np.ndarray, mask: np.ndarray, rise: float = RISE_M
     return int(raised[0]) + int(np.count_nonzero(raised[1:] & ~raised[:-1]))
 
 
-class StrideReflex:
-    """The reflex's stride a (rad) over an episode: `see` each height map, `advance` once per control step."""
-
-    def __init__(self, mask: np.ndarray, short: float, long: float, rise: float, fall: float):
-        """mask: the zone's cells (`hexpipe.sim.lift_reflex.zone_mask`); short, long: the stride at a straddle and
-        elsewhere (rad; the env passes a's bounds, cpg.lower and cpg.upper); rise, fall: a's rate bounds (rad/s)."""
-        if not mask.any():
-            raise ValueError("the stride reflex's zone holds no height-map cell")
-        self.mask, self.short, self.long, self.rise, self.fall = mask, short, long, rise, fall
-        self.level, self.straddle = long, False
-
-    def reset(self) -> None:
-        self.level, self.straddle = self.long, False
-
-    def see(self, heightmap: np.ndarray) -> None:
-        """Read the zone of this height map (rows x cols, m): a straddle when it holds two raised regions or more."""
-        self.straddle = raised_regions(heightmap, self.mask) >= 2
-
-    def advance(self, dt: float) -> float:
-        """The stride (rad) for the next `dt` s: ramped toward `short` while the last map showed a straddle, else
-        toward `long`."""
-        target = self.short if self.straddle else self.long
-        self.level = ramp_toward(self.level, target, self.rise, self.fall, dt)
-        return self.level
+def stride_reflex(mask: np.ndarray, short: float, long: float, rise: float, fall: float) -> ZoneReflex:
+    """The stride (rad): toward `short` while the zone (`mask`) holds two raised regions or more (a straddle),
+    toward `long` elsewhere (the env passes task.stride_reflex, or cpg.lower's a for the teacher alone, and
+    cpg.upper's a); rise, fall: a's rate bounds (rad/s)."""
+    return ZoneReflex("stride", mask, lambda heights, zone: raised_regions(heights, zone) >= 2, long, short, rise,
+                      fall)

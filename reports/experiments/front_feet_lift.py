@@ -35,6 +35,8 @@ def lifts(traces: Path, lead: float, column: str = "lift") -> pd.DataFrame:
     frame = pd.read_csv(traces)
     if "lift" not in frame:  # traces from before the lift reflex: the front legs swung with b
         frame["lift"] = frame["b"]
+    if "stride" not in frame:  # traces from before the stride reflex: the legs swung with a
+        frame["stride"] = frame["a"]
     frame["lift"] = frame[column]  # the column lift_before_and_away reads
     rows = []
     for episode, trace in frame[(frame.terrain == TERRAIN) & (frame.controller == "policy")].groupby("episode"):

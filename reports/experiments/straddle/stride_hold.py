@@ -31,7 +31,7 @@ GAIN, DAMPING = 40.0, 8.0  # the action (a's acceleration, in [-1, 1]) steering 
 
 def _steered(self, action):  # the env's own step, a's acceleration replaced by one toward the reflex's stride
     action = np.array(action, dtype=float, copy=True)
-    error, rate = self.stride.level - float(self.cpg.params[0]), float(self.cpg.rates[0])
+    error, rate = self.stride_reflex.level - float(self.cpg.params[0]), float(self.cpg.rates[0])
     action[0] = float(np.clip(GAIN * error - DAMPING * rate, -1.0, 1.0))
     return _step(self, action)
 
