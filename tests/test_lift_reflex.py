@@ -5,8 +5,9 @@ import math
 
 import numpy as np
 import pytest
+from held_gait import walk_held
 
-from hexpipe.config import ConfigError, CpgConfig, Params, SensorConfig, TaskConfig, apply_overrides, reflex_zone
+from hexpipe.config import ConfigError, Params, SensorConfig, TaskConfig, apply_overrides, reflex_zone
 from hexpipe.envs.hexapod import HexapodEnv
 from hexpipe.envs.rewards import lift_shortfall_penalty
 from hexpipe.sim.lift_reflex import lift_reflex, map_relief
@@ -75,17 +76,7 @@ def test_the_setting_is_refused_in_one_line_without_a_zone_or_with_a_zone_off_th
 
 def _walk(terrain: str, task: TaskConfig, seed: int = 0) -> tuple[dict, list[tuple[float, float, float]]]:
     """A rollout of the held low gait: its last info and (base x, b, lift) at every step."""
-    env = HexapodEnv(terrain, cpg=CpgConfig().holding(LOW_GAIT), initial_cpg=LOW_GAIT, task=task)
-    env.reset(seed=seed)
-    trace = []
-    try:
-        while True:
-            _, _, terminated, truncated, info = env.step(np.zeros(3))
-            trace.append((float(env.robot.base_state()[0][0]), float(info["cpg"][1]), info["lift"]))
-            if terminated or truncated:
-                return info, trace
-    finally:
-        env.close()
+    return walk_held(terrain, LOW_GAIT, task, lambda x, info: (x, float(info["cpg"][1]), info["lift"]), seed=seed)
 
 
 def test_the_reflex_carries_the_low_gait_over_the_block_it_stops_without_one():
@@ -132,19 +123,8 @@ def test_the_teacher_is_refused_in_one_line_without_a_zone_and_named():
 def test_the_teacher_asks_for_a_lift_before_the_block_and_moves_no_leg():
     """The held low gait under the teacher: nothing charged on open ground, the shortfall charged before the face,
     the legs at the gait's own lift throughout, so the block stops it as it does without the teacher."""
-    env = HexapodEnv("single_block", cpg=CpgConfig().holding(LOW_GAIT), initial_cpg=LOW_GAIT, task=TEACHER)
-    env.reset(seed=0)
-    steps = []
-    try:
-        while True:
-            _, reward, terminated, truncated, info = env.step(np.zeros(3))
-            terms = info["reward_terms"]
-            assert reward == pytest.approx(sum(terms.values()))
-            steps.append((float(env.robot.base_state()[0][0]), terms["teacher"], info["lift"]))
-            if terminated or truncated:
-                break
-    finally:
-        env.close()
+    info, steps = walk_held("single_block", LOW_GAIT, TEACHER,
+                            lambda x, info: (x, info["reward_terms"]["teacher"], info["lift"]))
     assert info["termination"] != "goal"
     assert all(lift == pytest.approx(LOW_GAIT[1]) for _, _, lift in steps)
     assert all(t == 0.0 for x, t, _ in steps if x < 0.2)

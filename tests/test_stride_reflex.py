@@ -4,6 +4,7 @@
 
 import numpy as np
 import pytest
+from held_gait import walk_held
 
 from hexpipe.config import ConfigError, CpgConfig, Params, TaskConfig, apply_overrides
 from hexpipe.envs.hexapod import HexapodEnv
@@ -60,19 +61,8 @@ def test_the_teacher_charges_as_distance_from_the_reflex_both_ways():
 
 def _walk(terrain: str) -> tuple[dict, list[tuple[float, float, float]]]:
     """The held long gait under the stride teacher: its last info and (base x, a, stride term) at every step."""
-    env = HexapodEnv(terrain, cpg=BOUNDS, initial_cpg=GAIT, task=TEACHER)
-    env.reset(seed=0)
-    trace = []
-    try:
-        while True:
-            _, reward, terminated, truncated, info = env.step(np.zeros(3))
-            terms = info["reward_terms"]
-            assert reward == pytest.approx(sum(terms.values()))
-            trace.append((float(env.robot.base_state()[0][0]), float(info["cpg"][0]), terms["stride"]))
-            if terminated or truncated:
-                return info, trace
-    finally:
-        env.close()
+    return walk_held(terrain, GAIT, TEACHER, lambda x, info: (x, float(info["cpg"][0]), info["reward_terms"]["stride"]),
+                     cpg=BOUNDS)
 
 
 def test_the_teacher_asks_for_the_short_stride_between_extra_blocks_and_moves_no_leg():
@@ -121,20 +111,13 @@ REFLEX_GAIT = (0.4, 0.45, 3.141593)  # the fixed gait's stride and cycle at a li
 
 def _reflex_walk(terrain: str, cap: float, seed: int) -> tuple[dict, list[tuple[float, float]]]:
     """The held gait (a 0.4, b 0.45) with the stride reflex at `cap` (0: off): its last info and (base x, the
-    legs' stride) at every step; the policy's a is checked to stay the gait's."""
-    task = TaskConfig(sensors=(), stride_reflex=cap)
-    env = HexapodEnv(terrain, cpg=CpgConfig().holding(REFLEX_GAIT), initial_cpg=REFLEX_GAIT, task=task)
-    env.reset(seed=seed)
-    trace = []
-    try:
-        while True:
-            _, _, terminated, truncated, info = env.step(np.zeros(3))
-            assert float(info["cpg"][0]) == pytest.approx(REFLEX_GAIT[0]) and "stride" not in info["reward_terms"]
-            trace.append((float(env.robot.base_state()[0][0]), info["stride"]))
-            if terminated or truncated:
-                return info, trace
-    finally:
-        env.close()
+    legs' stride) at every step; the policy's a is checked to stay the gait's, and no stride term charged."""
+
+    def row(x: float, info: dict) -> tuple[float, float]:
+        assert float(info["cpg"][0]) == pytest.approx(REFLEX_GAIT[0]) and "stride" not in info["reward_terms"]
+        return x, info["stride"]
+
+    return walk_held(terrain, REFLEX_GAIT, TaskConfig(sensors=(), stride_reflex=cap), row, seed=seed)
 
 
 def test_the_cpg_swings_the_legs_with_the_shorter_of_a_and_the_stride_cap():
