@@ -3,7 +3,7 @@ and evaluated as sweep trials, the one train-ppo keeps (the highest mean validat
 run a pipeline without selection trains (candidate p), judged on issue 10's targets over pipelines.
 
     .venv/bin/python reports/experiments/select/pipelines.py reports/sweeps/epyc30 reports/sweeps/cand ... \
-        [--validation reports/experiments/select/select30_validation.csv ...] [--repro reports]
+        [--validation reports/experiments/select/select30_validation.csv ...] [--csv-first] [--repro reports]
 
 A trial's validation return is the `selection.json` its sweep record carries (trials run since ppo.candidates,
 which train-ppo scores itself), or else the mean `env_return` of its episodes in a validate.py CSV (the same
@@ -44,7 +44,9 @@ def load_records(sweeps: list[Path]) -> list[dict]:
     return records
 
 
-def validation_return(record: dict, csv: pd.Series) -> float:
+def validation_return(record: dict, csv: pd.Series, csv_first: bool = False) -> float:
+    if csv_first and record["data"] in csv.index:
+        return float(csv[record["data"]])
     selection = record.get("selection") or {}
     own = selection.get("candidates", {}).get(str(record["seed"]))
     if own is not None:
@@ -73,13 +75,13 @@ def repro_pipeline(reports: Path, episodes: int) -> tuple[int, list[float], dict
 
 
 def main(sweeps: list[Path], validations: list[Path], flat: str = "flat", repro: Path | None = None,
-         repro_episodes: int = 10) -> None:
+         repro_episodes: int = 10, csv_first: bool = False) -> None:
     csv = (pd.concat([pd.read_csv(v) for v in validations]).groupby("trial")["env_return"].mean()
            if validations else pd.Series(dtype=float))
     records = load_records(sweeps)
     by_seed = {}
     for record in records:
-        record["v_return"] = validation_return(record, csv)
+        record["v_return"] = validation_return(record, csv, csv_first)
         by_seed.setdefault(record["seed"], record)  # the first sweep named wins a seed run twice
     pipelines = sorted({s % SEED_STRIDE for s in by_seed
                         if all(c in by_seed for c in candidate_seeds(s % SEED_STRIDE, CANDIDATES))})
@@ -151,5 +153,8 @@ if __name__ == "__main__":
     ap.add_argument("--validation", action="append", default=[], type=Path)
     ap.add_argument("--repro", type=Path, help="a reports folder of `make repro` to add as a pipeline")
     ap.add_argument("--episodes", type=int, default=10, help="--repro's episodes a terrain (the sweeps' eval.episodes)")
+    ap.add_argument("--csv-first", action="store_true",
+                    help="score trials by the --validation CSVs even where their records carry their own returns "
+                         "(another validation set than train-ppo's)")
     a = ap.parse_args()
-    main(a.sweeps, a.validation, repro=a.repro, repro_episodes=a.episodes)
+    main(a.sweeps, a.validation, repro=a.repro, repro_episodes=a.episodes, csv_first=a.csv_first)
