@@ -148,8 +148,8 @@ class HexapodEnv(gym.Env):
                        if self.task.reads_reflex else None)  # moves the legs only with task.lift_reflex
         short = self.task.stride_reflex or self.cpg_cfg.lower[0]  # the teacher alone asks for a's floor
         self.stride_reflex = (stride_reflex(reflex_zone(self.sensor_cfg, self.task), short, self.cpg_cfg.upper[0],
-                                     self.cpg_cfg.rate_limit[0], self.cpg_cfg.falling_limit[0])
-                       if self.task.reads_stride else None)  # moves the legs only with task.stride_reflex
+                                            self.cpg_cfg.rate_limit[0], self.cpg_cfg.falling_limit[0])
+                              if self.task.reads_stride else None)  # moves the legs only with task.stride_reflex
         self._readers: dict[str, Callable[[registry.SimView], np.ndarray]] = {}  # made on first use
         self.lift_cost_share = 1.0  # of task.lift_cost charged now: train-ppo's ppo.lift_cost_ramp lowers it
 
