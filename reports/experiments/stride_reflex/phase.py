@@ -13,12 +13,17 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-from hexpipe.config import ConfigError, load_params
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "ceiling"))
+from episodes import checked_inputs  # the helper in ../ceiling
+
+from hexpipe.config import load_params
 from hexpipe.evaluation.controllers import ControllerSpec
 from hexpipe.evaluation.episodes import EpisodeJob, run_episode
 from hexpipe.evaluation.suite import load_scenarios
@@ -49,11 +54,7 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--set", dest="overrides", action="append", default=[], metavar="SECTION.KEY=VALUE")
     a = ap.parse_args()
-    try:
-        load_params("params.yaml", overrides=a.overrides)  # a bad key or value: one line here, not in every worker
-        load_scenarios([a.terrain])
-    except (ConfigError, ValueError) as exc:
-        raise SystemExit(f"error: {exc}") from None
+    checked_inputs(a.overrides, [a.terrain], [a.policy])  # a bad key, terrain or policy: one line, not a traceback
     jobs = [(a.policy, a.terrain, i, tuple(a.overrides)) for i in range(a.episodes)]
     with ProcessPoolExecutor(a.workers) as pool:
         rows = pd.DataFrame(list(pool.map(_one, jobs)))
