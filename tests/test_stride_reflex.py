@@ -136,8 +136,8 @@ def test_the_cpg_swings_the_legs_with_the_shorter_of_a_and_the_stride_cap():
 @pytest.mark.parametrize("seed", [5, 10])
 def test_the_stride_reflex_carries_the_long_stride_over_the_straddle_it_stalls_at_without_one(seed):
     """The premise of task.stride_reflex: at a 0.4, b 0.45 the straddle of extra blocks stops the gait (base at
-    about 1.5 m) in 9 of 30 seeds (these two among them); the same gait, its stride capped at 0.35 only while both
-    blocks lie in the zone (base at 1.3-1.9 m), crosses."""
+    about 1.5 m) in 7 of 30 seeds, these two among them (reports/experiments/stride_reflex/premise.txt); the same
+    gait, its stride capped at 0.35 only while both blocks lie in the zone (base at 1.3-1.9 m), crosses."""
     info, _ = _reflex_walk("extra_blocks", 0.0, seed)
     assert info["termination"] == "stuck" and 1.3 < info["distance"] < 1.7
     info, trace = _reflex_walk("extra_blocks", 0.35, seed)
