@@ -232,6 +232,11 @@ class TaskConfig(_Section):
     # map shows the terrain in lift_free_zone rising or falling by more than 3 cm, and back to b's floor elsewhere;
     # the policy's b is untouched, the reflex only raises the swing (hexpipe/sim/lift_reflex.py; the `reflex` sweep)
     lift_reflex: bool = False
+    # [behind, ahead] (m): the zone the lift reflex reads (as leg mover and as teacher), when it should differ from
+    # lift_free_zone; null: lift_free_zone. A zone that starts at the base, e.g. [0.0, 0.7], lifts while a face lies
+    # ahead of the front feet and drops once the body has passed the block, where lift_free_zone's 0.6 m behind keeps
+    # the long lift until the hind feet have passed too (the `near_lift` sweep)
+    lift_reflex_zone: tuple[Annotated[float, Field(ge=0)], Annotated[float, Field(ge=0)]] | None = None
     # minus this much reward per rad the policy's b falls short of that reflex's lift, each control step: the reflex
     # as a teacher of where to lift, not a leg mover (that is lift_reflex); a training signal only, since evaluate
     # scores gaits, not rewards, so the policy walks without it (the `teacher` and `open` sweeps); 0 = off
@@ -250,10 +255,24 @@ class TaskConfig(_Section):
 
     @model_validator(mode="after")
     def _reflex_has_a_zone(self) -> TaskConfig:
-        if self.reads_zone and self.lift_free_zone is None:
+        if self.lift_free_zone is None and (self.reads_stride or (self.reads_reflex and self.lift_reflex_zone is None)):
             raise ValueError(f"{self._zone_readers('read')} the terrain in lift_free_zone, which is null; set it, e.g. "
                              "[0.6, 0.7]")
         return self
+
+    @model_validator(mode="after")
+    def _lift_reflex_zone_is_read(self) -> TaskConfig:
+        if self.lift_reflex_zone is not None and not self.reads_reflex:
+            raise ValueError(f"task.lift_reflex_zone {list(self.lift_reflex_zone)} is the zone the lift reflex reads, "
+                             "but neither lift_reflex nor lift_teacher is on; turn one on or set it to null")
+        return self
+
+    @property
+    def lift_zone(self) -> tuple[float, float]:
+        """[behind, ahead] (m): the zone the lift reflex reads, lift_reflex_zone or else lift_free_zone."""
+        zone = self.lift_reflex_zone or self.lift_free_zone
+        assert zone is not None, "no zone: the validators refuse a reflex without one"
+        return zone
 
     @property
     def reads_reflex(self) -> bool:
@@ -498,12 +517,18 @@ class Params(_Section):
 
     @model_validator(mode="after")
     def _reflex_zone_on_the_map(self) -> Params:
-        """The reflexes (task.lift_reflex, lift_teacher, stride_teacher, stride_reflex) read task.lift_free_zone off
-        the height map: the map must hold part of the zone."""
-        if self.task.reads_zone and not reflex_zone(self.sensors, self.task).any():
-            raise ValueError(f"task.lift_free_zone {list(self.task.lift_free_zone)} lies outside the height map "
-                             f"(sensors.heightmap_ahead {list(self.sensors.heightmap_ahead)}): "
-                             f"{self.task._zone_readers('see')} none of it")
+        """The reflexes read their zone off the height map: the lift reflex (task.lift_reflex, lift_teacher)
+        task.lift_zone, the stride reflex (stride_teacher, stride_reflex) task.lift_free_zone. The map must hold part
+        of each."""
+        task = self.task
+        lift_key = "lift_reflex_zone" if task.lift_reflex_zone else "lift_free_zone"
+        zones = ([(lift_key, task.lift_zone)] if task.reads_reflex else []) + (
+            [("lift_free_zone", task.lift_free_zone)] if task.reads_stride else [])
+        for key, zone in zones:
+            if not reflex_zone(self.sensors, zone).any():
+                raise ValueError(f"task.{key} {list(zone)} lies outside the height map "
+                                 f"(sensors.heightmap_ahead {list(self.sensors.heightmap_ahead)}): "
+                                 f"{task._zone_readers('see')} none of it")
         return self
 
     @model_validator(mode="after")
@@ -519,12 +544,13 @@ class Params(_Section):
         return self
 
 
-def reflex_zone(sensors: SensorConfig, task: TaskConfig) -> Any:
-    """The height-map cells the reflexes read ((rows, cols) bool; `hexpipe.sim.zone_reflex.zone_mask`)."""
+def reflex_zone(sensors: SensorConfig, zone: tuple[float, float]) -> Any:
+    """The height-map cells a reflex reads ((rows, cols) bool; `hexpipe.sim.zone_reflex.zone_mask`) for its zone
+    [behind, ahead] (m): task.lift_zone for the lift reflex, task.lift_free_zone for the stride reflex."""
     from hexpipe.sim.zone_reflex import zone_mask
 
     near, far = sensors.heightmap_ahead
-    behind, ahead = task.lift_free_zone
+    behind, ahead = zone
     return zone_mask(near, far, sensors.heightmap_rows, sensors.heightmap_cols, sensors.heightmap_width, behind, ahead)
 
 

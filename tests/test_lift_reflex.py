@@ -25,7 +25,7 @@ def test_the_zone_is_the_cells_from_behind_the_hind_feet_to_ahead_of_the_front_f
     assert rows.tolist() == list(range(21))  # row 20's centre is at 0.681 m, row 21's at 0.744 m
     assert cols.tolist() == list(range(10, 22))  # centres from -0.275 m to +0.275 m
     assert mask.sum() == 21 * 12
-    assert np.array_equal(reflex_zone(SensorConfig(), TaskConfig()), mask)
+    assert np.array_equal(reflex_zone(SensorConfig(), TaskConfig().lift_zone), mask)
 
 
 def test_relief_is_rise_minus_fall_inside_the_zone_only():
@@ -137,3 +137,45 @@ def test_runs_without_the_teacher_log_the_terms_they_always_did():
     _, _, _, _, info = env.step(np.zeros(3))
     env.close()
     assert set(info["reward_terms"]) == {"forward", "power", "lift", "failure"}
+
+
+NEAR = TaskConfig(sensors=(), lift_reflex=True, lift_reflex_zone=(0.2, 0.7))  # the lift reflex's own, shorter zone
+
+
+def test_a_zone_of_its_own_moves_only_the_lift_reflex():
+    """task.lift_reflex_zone is what the lift reflex reads; the stride reflex keeps lift_free_zone."""
+    env = HexapodEnv("flat", task=NEAR.model_copy(update={"stride_reflex": 0.3}))
+    sensors = SensorConfig()
+    assert np.array_equal(env.reflex.mask, reflex_zone(sensors, (0.2, 0.7)))
+    assert np.array_equal(env.stride_reflex.mask, reflex_zone(sensors, (0.6, 0.7)))
+    assert env.reflex.mask.sum() < env.stride_reflex.mask.sum()
+    env.close()
+
+
+def test_a_zone_of_its_own_drops_the_lift_sooner_past_the_block_and_still_crosses():
+    """The default zone reaches 0.6 m behind the base, so the legs swing high until the hind feet are well past the
+    block; 0.2 m behind lets the lift down about 0.4 m sooner. Both start lifting where the face enters 0.7 m
+    ahead, and both carry the low gait across."""
+    lifted = {}
+    for name, task in (("default", REFLEX), ("near", NEAR)):
+        info, trace = _walk("single_block", task)
+        assert info["termination"] == "goal"
+        lifted[name] = [x for x, _, lift in trace if lift > LOW_GAIT[1] + 1e-6]
+    assert min(lifted["near"]) == pytest.approx(min(lifted["default"]), abs=0.02)
+    assert 0.3 < max(lifted["default"]) - max(lifted["near"]) < 0.5
+
+
+def test_a_zone_of_its_own_is_refused_in_one_line_when_no_reflex_reads_it_or_it_lies_off_the_map():
+    with pytest.raises(ConfigError, match=r"lift_reflex_zone \[0.2, 0.7\] .*neither lift_reflex nor lift_teacher") \
+            as exc:
+        apply_overrides(Params(), ["task.lift_teacher=0", "task.lift_reflex_zone=[0.2, 0.7]"])
+    assert "\n" not in str(exc.value)
+    with pytest.raises(ConfigError, match=r"task.lift_reflex_zone \[0.0, 0.0\] lies outside the height map") as exc:
+        apply_overrides(Params(), ["task.lift_reflex=true", "task.lift_reflex_zone=[0, 0]"])
+    assert "\n" not in str(exc.value)
+    with pytest.raises(ConfigError, match="lift_reflex_zone"):
+        apply_overrides(Params(), ["task.lift_reflex=true", "task.lift_reflex_zone=[-0.1, 0.7]"])
+    # its own zone stands in for a null lift_free_zone, since only the lift price then reads that
+    params = apply_overrides(Params(), ["task.lift_reflex=true", "task.lift_reflex_zone=[0.2, 0.7]",
+                                        "task.lift_free_zone=null", "task.lift_teacher=0"])
+    assert params.task.lift_zone == (0.2, 0.7)

@@ -34,6 +34,7 @@ import math
 from collections import deque
 from collections.abc import Callable, Iterable
 from contextlib import suppress
+from functools import partial
 from typing import Any, ClassVar
 
 import gymnasium as gym
@@ -143,11 +144,12 @@ class HexapodEnv(gym.Env):
         self.cpg = CPG(self.cpg_cfg, np.array([leg.tripod for leg in self.robot_spec.legs]))
         self.trail = (LiftTrail(foot_lags(self.robot_spec, self.sim_cfg.stance_reach), self.max_steps + 1)
                       if self.cpg_cfg.lift_follows else None)
-        self.reflex = (lift_reflex(reflex_zone(self.sensor_cfg, self.task), RELIEF_M, self.cpg_cfg.lower[1],
-                                   self.cpg_cfg.upper[1], self.cpg_cfg.rate_limit[1], self.cpg_cfg.falling_limit[1])
+        on_map = partial(reflex_zone, self.sensor_cfg)
+        self.reflex = (lift_reflex(on_map(self.task.lift_zone), RELIEF_M, self.cpg_cfg.lower[1], self.cpg_cfg.upper[1],
+                                   self.cpg_cfg.rate_limit[1], self.cpg_cfg.falling_limit[1])
                        if self.task.reads_reflex else None)  # moves the legs only with task.lift_reflex
         short = self.task.stride_reflex or self.cpg_cfg.lower[0]  # the teacher alone asks for a's floor
-        self.stride_reflex = (stride_reflex(reflex_zone(self.sensor_cfg, self.task), short, self.cpg_cfg.upper[0],
+        self.stride_reflex = (stride_reflex(on_map(self.task.lift_free_zone), short, self.cpg_cfg.upper[0],
                                             self.cpg_cfg.rate_limit[0], self.cpg_cfg.falling_limit[0])
                               if self.task.reads_stride else None)  # moves the legs only with task.stride_reflex
         self._readers: dict[str, Callable[[registry.SimView], np.ndarray]] = {}  # made on first use

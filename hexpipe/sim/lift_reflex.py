@@ -11,6 +11,9 @@ trail is), so a policy can walk low on open ground and leave the faces to the re
 reflex's lift moves toward its target (b's ceiling near uneven ground, b's floor elsewhere) no faster than b itself
 may (cpg.rate_limit, cpg.fall_rate_limit), so a step into the zone is a ramp, not a jump.
 
+The zone is task.lift_zone: task.lift_reflex_zone when set (e.g. [0.2, 0.7], which lets the lift down once the body
+has passed a block), else lift_free_zone.
+
 Pure NumPy, a `hexpipe.sim.zone_reflex.ZoneReflex` with this module's trigger.
 """
 

@@ -30,7 +30,7 @@ def walk(params, terrain: str, gait: tuple[float, float, float], seed: int) -> t
     """(termination, steps, base x at every step the zone held a straddle) of one held-gait episode."""
     cpg = params.cpg.model_copy(update={"upper": (0.4, 0.8, 6.283185)}).holding(gait)
     env = HexapodEnv(terrain, params.sim, cpg, params.sensors, params.task, initial_cpg=gait)
-    mask = reflex_zone(params.sensors, params.task)
+    mask = reflex_zone(params.sensors, params.task.lift_free_zone)
     env.reset(seed=seed)
     xs: list[float] = []
     try:
