@@ -228,6 +228,11 @@ class TaskConfig(_Section):
     # the observation's `body` starts with x, y relative to the start (the paper's state); false drops them, so the
     # policy must find the block with its terrain sensor instead of memorising where it was (body: 13 -> 11 numbers)
     observe_position: bool = False
+    # the observation's `cpg` also holds the gait's phase, cos and sin of leg 0's oscillator (the tripods are locked to
+    # it): without it the policy sees a, b, omega and their rates but not where in its swing each leg is, so it cannot
+    # time a lift to the legs; a draw that lifts late in one phase window misses the face there (the `phase_obs`
+    # sweep; cpg: 6 -> 8 numbers)
+    observe_phase: bool = False
     # true: every leg swings at least as high as a reflex that reads the height map, ramping to b's ceiling while the
     # map shows the terrain in lift_free_zone rising or falling by more than 3 cm, and back to b's floor elsewhere;
     # the policy's b is untouched, the reflex only raises the swing (hexpipe/sim/lift_reflex.py; the `reflex` sweep)

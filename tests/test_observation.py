@@ -121,3 +121,52 @@ def test_a_policy_trained_without_position_loads_only_with_that_setting(tmp_path
     paper = load_params(root / "params.yaml", [*tiny, "task.observe_position=true"])
     with pytest.raises(PolicyError, match=r"task\.observe_position=false, params now have true"):
         load_policy(tmp_path / "ppo", paper)
+
+
+def test_the_phase_setting_adds_the_legs_phase_to_the_cpg_observation() -> None:
+    """With task.observe_phase the `cpg` entry ends with (cos, sin) of leg 0's oscillator, which turns at omega."""
+    from gymnasium.utils.env_checker import check_env as gym_check
+
+    plain = HexapodEnv("flat", task=TaskConfig(sensors=()))
+    assert plain.observation_space["cpg"].shape == (6,)
+    plain.close()
+    env = HexapodEnv("flat", task=TaskConfig(sensors=(), observe_phase=True))
+    assert env.observation_space["cpg"].shape == (8,)
+    obs, _ = env.reset(seed=3)
+    angles = []
+    for _ in range(5):
+        cos, sin = obs["cpg"][6:]
+        assert cos == pytest.approx(np.cos(np.angle(env.cpg.w[0])), abs=1e-6)
+        assert sin == pytest.approx(np.sin(np.angle(env.cpg.w[0])), abs=1e-6)
+        angles.append(np.arctan2(sin, cos))
+        obs, *_ = env.step(np.zeros(3))
+    turned = np.mod(np.diff(angles), 2 * np.pi)  # the held gait turns by omega * control_dt each step
+    np.testing.assert_allclose(turned, env.cpg.params[2] * env.control_dt, rtol=0.05)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        gym_check(env, skip_render_check=True)
+    env.close()
+    assert not [str(w.message) for w in caught]
+
+
+def test_a_policy_trained_with_the_phase_loads_with_it_and_is_refused_without(tmp_path) -> None:
+    from hexpipe.config import load_params
+    from hexpipe.rl.policy import PolicyError, load_policy
+    from hexpipe.rl.train import train_ppo
+
+    root = Path(__file__).resolve().parents[1]
+    tiny = [
+        "ppo.total_timesteps=64", "ppo.n_steps=64", "ppo.batch_size=64", "ppo.n_epochs=1", "ppo.n_envs=1",
+        "ppo.blind=true", "ppo.train_terrains=[single_block]", "task.time_limit=2.0",
+        f"ppo.out_dir={tmp_path / 'ppo'}", f"ppo.report_dir={tmp_path / 'reports'}",
+    ]
+    train_ppo(load_params(root / "params.yaml", [*tiny, "task.observe_phase=true"]), show_progress=False)
+    policy = load_policy(tmp_path / "ppo")  # no params: policy.json's own observation settings
+    assert policy.config["observation_dim"] == 19 and policy.params.task.observe_phase
+    env = HexapodEnv("flat", **policy.env_kwargs)
+    obs, _ = env.reset(seed=0)
+    assert obs["cpg"].shape == (8,) and policy.predict(obs).shape == (3,)
+    env.close()
+    with pytest.raises(PolicyError, match=r"task\.observe_phase=true, params now have false") as exc:
+        load_policy(tmp_path / "ppo", load_params(root / "params.yaml", tiny))
+    assert "\n" not in str(exc.value)

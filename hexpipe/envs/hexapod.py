@@ -6,7 +6,8 @@ Observation (Dict):
   quaternion (xyzw), linear velocity (m/s) and angular velocity (rad/s), world frame; 11 without x, y when
   `TaskConfig.observe_position` is false (the same course shifted along x then looks the same at the same
   distance from its block);
-- `cpg` (6): a, b, omega and their rates;
+- `cpg` (6): a, b, omega and their rates; 8 with `TaskConfig.observe_phase`, which adds the gait's phase as
+  (cos, sin) of leg 0's oscillator, so the policy can time its lift to the legs' swing;
 - one entry per sensor named in `TaskConfig.sensors`, as the sensor registry (`hexpipe.sensors`) declares it:
   `heightmap` (rows * cols,) float32 m, row-major; `rgb` (H, W, 3) uint8; `contacts` (12,) per-leg contact
   flags then normal forces (N).
@@ -81,7 +82,8 @@ def observation_space(cpg: CpgConfig, sensors: SensorConfig, task: TaskConfig, p
     obs: dict[str, spaces.Space] = {
         "body": spaces.Box(-100.0, 100.0, shape=(13 if task.observe_position else 11,), dtype=np.float32),
         "cpg": spaces.Box(
-            np.concatenate([lo, -fall]).astype(np.float32), np.concatenate([hi, rate]).astype(np.float32)
+            np.concatenate([lo, -fall, [-1.0, -1.0][:2 * task.observe_phase]]).astype(np.float32),
+            np.concatenate([hi, rate, [1.0, 1.0][:2 * task.observe_phase]]).astype(np.float32),
         ),
     }
     for name in task.sensors:
@@ -343,7 +345,7 @@ class HexapodEnv(gym.Env):
             body = body[2:]  # no x, y: height above the terrain, orientation and velocities only
         obs = {
             "body": np.clip(body, -100, 100).astype(np.float32),
-            "cpg": np.concatenate([self.cpg.params, self.cpg.rates]).astype(np.float32),
+            "cpg": np.concatenate([self.cpg.params, self.cpg.rates, self._phase()]).astype(np.float32),
         }
         sensed = self.sense(self._sensed, base=(pos, quat))
         if self.reflex is not None:
@@ -355,6 +357,14 @@ class HexapodEnv(gym.Env):
         if self.privileged:
             obs[PRIVILEGED] = privileged_vector(sensed["heightmap"], *self._physics, self.sensor_cfg, self._corridor)
         return obs
+
+    def _phase(self) -> np.ndarray:
+        """(cos, sin) of leg 0's oscillator phase with task.observe_phase, else empty: the tripods are locked to it,
+        so it says where in its swing every leg is."""
+        if not self.task.observe_phase:
+            return np.empty(0)
+        angle = float(np.angle(self.cpg.w[0]))
+        return np.array([math.cos(angle), math.sin(angle)])
 
     def sense(self, names: Iterable[str], base: tuple[np.ndarray, np.ndarray] | None = None) -> dict[str, np.ndarray]:
         """Read the named sensors now (their readings, `Sensor.frame_shape`), e.g. `heightmap` (rows x cols, m

@@ -29,6 +29,9 @@ from hexpipe.validation import one_line
 
 POLICY_SUBDIR = "policy"  # train.py saves the policy files here
 _RETRAIN = "run `hexpipe train-ppo`"
+# the task's observation settings a policy.json records (they shape the policy's input), each with what a policy.json
+# from before the setting existed means: those policies saw x, y and no phase
+_OBSERVATION_SETTINGS = (("observe_position", True), ("observe_phase", False))
 _ACTION_MEANING = {1: "the rates of a, b, omega", 2: "the second derivatives of a, b, omega"}
 
 
@@ -107,12 +110,13 @@ def load_policy(
         want, got = ("blind", "one that sees the terrain") if expect_blind else ("seeing", "a blind one")
         raise PolicyError(f"{directory}: expected a {want} policy, found {got} (policy.json blind={blind})")
 
-    trained_position = config.get("observe_position", True)  # policies from before the setting saw x, y
-    if trained_position != params.task.observe_position:
-        raise PolicyError(
-            f"{directory}: policy was trained with task.observe_position={str(trained_position).lower()}, params now "
-            f"have {str(params.task.observe_position).lower()}; evaluate with the training setting or {_RETRAIN}"
-        )
+    for key, before in _OBSERVATION_SETTINGS:
+        trained = config.get(key, before)
+        if trained != getattr(params.task, key):
+            raise PolicyError(
+                f"{directory}: policy was trained with task.{key}={str(trained).lower()}, params now have "
+                f"{str(getattr(params.task, key)).lower()}; evaluate with the training setting or {_RETRAIN}"
+            )
     trained_order = (_recorded(config, "cpg") or {}).get("action_order", 2)  # 2 before the setting existed
     if trained_order != params.cpg.action_order:
         meaning = _ACTION_MEANING.get(trained_order, "unknown")
@@ -150,10 +154,11 @@ def load_policy(
 
 
 def _training_params(config: dict[str, Any], path: Path) -> Params:
-    """Params with the sim, cpg and sensor settings recorded in policy.json (other sections: defaults)."""
+    """Params with the sim, cpg and sensor settings and the task's observation settings recorded in policy.json
+    (everything else: defaults)."""
     from pydantic import ValidationError
 
-    sections = {}
+    sections: dict[str, Any] = {"task": {key: config.get(key, before) for key, before in _OBSERVATION_SETTINGS}}
     for name, model in (("sim", SimConfig), ("cpg", CpgConfig), ("sensors", SensorConfig)):
         recorded = _recorded(config, name)
         if not isinstance(recorded, dict):

@@ -141,6 +141,7 @@ def policy_config(params: Params, encoder, observation_dim: int) -> dict[str, An
         "train_terrains": list(params.ppo.train_terrains),
         "randomize": params.ppo.randomize,
         "observe_position": params.task.observe_position,
+        "observe_phase": params.task.observe_phase,
         "privileged_critic": params.ppo.privileged_critic,  # training only: the policy's inputs are the same
         "rise_readout": params.ppo.rise_readout,
     }
