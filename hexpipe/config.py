@@ -238,9 +238,9 @@ class TaskConfig(_Section):
     # the policy's b is untouched, the reflex only raises the swing (hexpipe/sim/lift_reflex.py; the `reflex` sweep)
     lift_reflex: bool = False
     # [behind, ahead] (m): the zone the lift reflex reads (as leg mover and as teacher), when it should differ from
-    # lift_free_zone; null: lift_free_zone. A zone that starts at the base, e.g. [0.0, 0.7], lifts while a face lies
-    # ahead of the front feet and drops once the body has passed the block, where lift_free_zone's 0.6 m behind keeps
-    # the long lift until the hind feet have passed too (the `near_lift` sweep)
+    # lift_free_zone; null: lift_free_zone. [0.2, 0.7] lets the lift down about 0.4 m sooner past a block than
+    # lift_free_zone's 0.6 m behind does (the held low gait still crosses); on trained policies it closes their misses
+    # as the default zone does, and hands the fixed gait the same lift (the `near_lift` readout)
     lift_reflex_zone: tuple[Annotated[float, Field(ge=0)], Annotated[float, Field(ge=0)]] | None = None
     # minus this much reward per rad the policy's b falls short of that reflex's lift, each control step: the reflex
     # as a teacher of where to lift, not a leg mover (that is lift_reflex); a training signal only, since evaluate
