@@ -11,6 +11,8 @@ from hexpipe.config import TaskConfig
 from hexpipe.envs.hexapod import HexapodEnv
 from hexpipe.sim.terrain import BlockSpec, TerrainRecipe
 
+ROOT = Path(__file__).resolve().parents[1]
+
 SHIFT = 0.4  # m the whole course moves along x
 
 
@@ -99,18 +101,22 @@ def test_policy_features_follow_the_setting() -> None:
     assert dims == {True: 19, False: 17}
 
 
+def tiny_training(tmp_path: Path) -> list[str]:
+    """Overrides for a blind PPO run of 64 steps into tmp_path: enough to write a loadable policy."""
+    return [
+        "ppo.total_timesteps=64", "ppo.n_steps=64", "ppo.batch_size=64", "ppo.n_epochs=1", "ppo.n_envs=1",
+        "ppo.blind=true", "ppo.train_terrains=[single_block]", "task.time_limit=2.0",
+        f"ppo.out_dir={tmp_path / 'ppo'}", f"ppo.report_dir={tmp_path / 'reports'}",
+    ]
+
+
 def test_a_policy_trained_without_position_loads_only_with_that_setting(tmp_path) -> None:
     from hexpipe.config import load_params
     from hexpipe.rl.policy import PolicyError, load_policy
     from hexpipe.rl.train import train_ppo
 
-    root = Path(__file__).resolve().parents[1]
-    tiny = [
-        "ppo.total_timesteps=64", "ppo.n_steps=64", "ppo.batch_size=64", "ppo.n_epochs=1", "ppo.n_envs=1",
-        "ppo.blind=true", "ppo.train_terrains=[single_block]", "task.time_limit=2.0",
-        f"ppo.out_dir={tmp_path / 'ppo'}", f"ppo.report_dir={tmp_path / 'reports'}",
-    ]
-    params = load_params(root / "params.yaml", [*tiny, "task.observe_position=false"])
+    tiny = tiny_training(tmp_path)
+    params = load_params(ROOT / "params.yaml", [*tiny, "task.observe_position=false"])
     train_ppo(params, show_progress=False)
     policy = load_policy(tmp_path / "ppo", params)
     assert policy.config["observation_dim"] == 17 and policy.config["observe_position"] is False
@@ -118,7 +124,7 @@ def test_a_policy_trained_without_position_loads_only_with_that_setting(tmp_path
     obs, _ = env.reset(seed=0)
     assert policy.predict(obs).shape == (3,)
     env.close()
-    paper = load_params(root / "params.yaml", [*tiny, "task.observe_position=true"])
+    paper = load_params(ROOT / "params.yaml", [*tiny, "task.observe_position=true"])
     with pytest.raises(PolicyError, match=r"task\.observe_position=false, params now have true"):
         load_policy(tmp_path / "ppo", paper)
 
@@ -154,13 +160,8 @@ def test_a_policy_trained_with_the_phase_loads_with_it_and_is_refused_without(tm
     from hexpipe.rl.policy import PolicyError, load_policy
     from hexpipe.rl.train import train_ppo
 
-    root = Path(__file__).resolve().parents[1]
-    tiny = [
-        "ppo.total_timesteps=64", "ppo.n_steps=64", "ppo.batch_size=64", "ppo.n_epochs=1", "ppo.n_envs=1",
-        "ppo.blind=true", "ppo.train_terrains=[single_block]", "task.time_limit=2.0",
-        f"ppo.out_dir={tmp_path / 'ppo'}", f"ppo.report_dir={tmp_path / 'reports'}",
-    ]
-    train_ppo(load_params(root / "params.yaml", [*tiny, "task.observe_phase=true"]), show_progress=False)
+    tiny = tiny_training(tmp_path)
+    train_ppo(load_params(ROOT / "params.yaml", [*tiny, "task.observe_phase=true"]), show_progress=False)
     policy = load_policy(tmp_path / "ppo")  # no params: policy.json's own observation settings
     assert policy.config["observation_dim"] == 19 and policy.params.task.observe_phase
     env = HexapodEnv("flat", **policy.env_kwargs)
@@ -168,5 +169,5 @@ def test_a_policy_trained_with_the_phase_loads_with_it_and_is_refused_without(tm
     assert obs["cpg"].shape == (8,) and policy.predict(obs).shape == (3,)
     env.close()
     with pytest.raises(PolicyError, match=r"task\.observe_phase=true, params now have false") as exc:
-        load_policy(tmp_path / "ppo", load_params(root / "params.yaml", tiny))
+        load_policy(tmp_path / "ppo", load_params(ROOT / "params.yaml", tiny))
     assert "\n" not in str(exc.value)
