@@ -268,7 +268,7 @@ class TaskConfig(_Section):
     @model_validator(mode="after")
     def _lift_reflex_zone_is_read(self) -> TaskConfig:
         if self.lift_reflex_zone is not None and not self.reads_reflex:
-            raise ValueError(f"task.lift_reflex_zone {list(self.lift_reflex_zone)} is the zone the lift reflex reads, "
+            raise ValueError(f"lift_reflex_zone {list(self.lift_reflex_zone)} is the zone the lift reflex reads, "
                              "but neither lift_reflex nor lift_teacher is on; turn one on or set it to null")
         return self
 
