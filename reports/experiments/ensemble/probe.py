@@ -73,8 +73,7 @@ def _use_ensembles() -> None:
 def _one(job: tuple[str, ControllerSpec, str, int, tuple[str, ...]]) -> dict:
     name, controller, terrain, index, overrides = job
     row = evaluate_episode(controller, terrain, index, overrides)
-    return {"ensemble": name, "terrain": terrain, "episode": index, "success": bool(row["success"]),
-            "time": row["time"], "cost_of_transport": row["cost_of_transport"], "b_mean": row["b_mean"]}
+    return {"ensemble": name, **row, "controller": name}  # evaluate's whole row, so the verdict can be computed
 
 
 def _ensemble(text: str) -> tuple[str, list[str]]:
