@@ -7,6 +7,7 @@ trial's results.csv for the same policy.
 
 from __future__ import annotations
 
+import argparse
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -28,6 +29,16 @@ def checked_inputs(overrides: Sequence[str], terrains: Sequence[str] = (), polic
     except (ConfigError, TerrainError, PolicyError) as exc:
         raise SystemExit(f"error: {exc}") from None
     return params
+
+
+def add_episode_options(ap: argparse.ArgumentParser, episodes: int) -> None:
+    """The options the readout scripts share: --terrain (repeatable), --episodes a terrain, --workers, --set
+    (repeatable) and --csv."""
+    ap.add_argument("--terrain", dest="terrains", action="append")
+    ap.add_argument("--episodes", type=int, default=episodes)
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--set", dest="overrides", action="append", default=[], metavar="SECTION.KEY=VALUE")
+    ap.add_argument("--csv", help="also write every episode's row here")
 
 
 def parse_gait(text: str) -> tuple[float, float, float]:

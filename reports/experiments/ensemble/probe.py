@@ -28,7 +28,7 @@ import numpy as np
 import pandas as pd
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "ceiling"))
-from episodes import checked_inputs, evaluate_episode  # the helpers in ../ceiling
+from episodes import add_episode_options, checked_inputs, evaluate_episode  # the helpers in ../ceiling
 
 import hexpipe.evaluation.episodes as episodes_module
 from hexpipe.config import Params
@@ -87,11 +87,7 @@ def _ensemble(text: str) -> tuple[str, list[str]]:
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--ensemble", dest="ensembles", action="append", required=True, metavar="NAME:DIRS")
-    ap.add_argument("--terrain", dest="terrains", action="append")
-    ap.add_argument("--episodes", type=int, default=40)
-    ap.add_argument("--workers", type=int, default=2)
-    ap.add_argument("--set", dest="overrides", action="append", default=[], metavar="SECTION.KEY=VALUE")
-    ap.add_argument("--csv", help="also write every episode's row here")
+    add_episode_options(ap, episodes=40)
     a = ap.parse_args()
     terrains = a.terrains or ["single_block", "extra_blocks"]
     ensembles = [_ensemble(text) for text in a.ensembles]

@@ -20,7 +20,7 @@ from pathlib import Path
 import pandas as pd
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "ceiling"))
-from episodes import checked_inputs, evaluate_episode, parse_gait  # the helpers in ../ceiling
+from episodes import add_episode_options, checked_inputs, evaluate_episode, parse_gait  # the helpers in ../ceiling
 
 from hexpipe.evaluation.controllers import ControllerSpec
 
@@ -45,11 +45,7 @@ def main() -> None:
     ap.add_argument("policies", nargs="*")
     ap.add_argument("--gait", help="a fixed gait a,b,omega walked beside the policies")
     ap.add_argument("--arm", dest="arms", action="append", required=True, metavar="NAME:SETS")
-    ap.add_argument("--terrain", dest="terrains", action="append")
-    ap.add_argument("--episodes", type=int, default=20)
-    ap.add_argument("--workers", type=int, default=2)
-    ap.add_argument("--set", dest="overrides", action="append", default=[], metavar="SECTION.KEY=VALUE")
-    ap.add_argument("--csv", help="also write every episode's row here")
+    add_episode_options(ap, episodes=20)
     a = ap.parse_args()
     terrains = a.terrains or ["single_block", "extra_blocks"]
     arms = [_arm(text) for text in a.arms]
