@@ -10,7 +10,10 @@ and per terrain how many of the shared seeds beat the fixed gait on each side.
 
     .venv/bin/python reports/experiments/open/verdict_terrains.py reports/sweeps/open open_teacher
     .venv/bin/python reports/experiments/open/verdict_terrains.py reports/sweeps/pinned pinned \
-        --against reports/sweeps/open:open_teacher
+        --against reports/sweeps/open:open_teacher [--seeds 1,1001,2001]
+
+--seeds keeps only those training seeds' trials, so a figure read on a sweep's first seeds still reprints after
+more seeds were added to it.
 """
 
 import argparse
@@ -30,17 +33,24 @@ def _mean(stats: dict, key: str) -> float:
     return float("nan") if value is None else float(value)
 
 
-def _trials(sweep: Path, condition: str) -> list[Path]:
+def _seed(path: Path) -> int:
+    """The training seed of a trial's <sweep>/<condition>-seed<N>/eval/metrics.json."""
+    return int(path.parent.parent.name.rsplit("-seed", 1)[1])
+
+
+def _trials(sweep: Path, condition: str, seeds: set[int] | None = None) -> list[Path]:
     paths = sorted(sweep.glob(f"{condition}-seed*/eval/metrics.json"))
+    paths = [p for p in paths if seeds is None or _seed(p) in seeds]
     if not paths:
-        raise SystemExit(f"error: {sweep}: no trial of {condition!r} has eval/metrics.json")
+        raise SystemExit(f"error: {sweep}: no trial of {condition!r} has eval/metrics.json"
+                         + (f" among seeds {sorted(seeds)}" if seeds else ""))
     return paths
 
 
-def terrain_table(sweep: Path, condition: str) -> None:
+def terrain_table(sweep: Path, condition: str, seeds: set[int] | None = None) -> None:
     """Print the per-terrain differences from the fixed gait and each trial's count of terrains beaten."""
     rows, trials = [], []
-    for path in _trials(sweep, condition):
+    for path in _trials(sweep, condition, seeds):
         metrics = json.loads(path.read_text())
         for terrain in [k for k, v in metrics.items() if isinstance(v, dict) and "policy" in v]:
             policy, fixed = metrics[terrain]["policy"], metrics[terrain]["best_fixed"]
@@ -77,13 +87,12 @@ def terrain_table(sweep: Path, condition: str) -> None:
     print("terrains beaten per trial: " + ", ".join(f"{trial} {count}" for trial, count in beaten.items()))
 
 
-def verdicts(sweep: Path, condition: str) -> pd.DataFrame:
+def verdicts(sweep: Path, condition: str, seeds: set[int] | None = None) -> pd.DataFrame:
     """One row per training seed, one column per terrain (1: beaten), from each trial's eval/metrics.json."""
     rows = {}
-    for path in _trials(sweep, condition):
+    for path in _trials(sweep, condition, seeds):
         metrics = json.loads(path.read_text())
-        seed = int(path.parent.parent.name.rsplit("-seed", 1)[1])
-        rows[seed] = {
+        rows[_seed(path)] = {
             k.removeprefix("verdict/policy/"): v
             for k, v in metrics.items()
             if k.startswith("verdict/policy/") and k.count("/") == 2 and k.rsplit("/", 1)[1] not in SUMMARIES
@@ -113,14 +122,19 @@ def main() -> None:
     ap.add_argument("sweep", type=Path, help="a sweep's report folder, e.g. reports/sweeps/open")
     ap.add_argument("condition")
     ap.add_argument("--against", metavar="SWEEP_FOLDER:CONDITION", help="pair with this condition by training seed")
+    ap.add_argument("--seeds", help="only these training seeds, comma-separated (default: every trial)")
     args = ap.parse_args()
-    terrain_table(args.sweep, args.condition)
+    try:
+        seeds = {int(s) for s in args.seeds.split(",")} if args.seeds else None
+    except ValueError:
+        raise SystemExit(f"error: --seeds {args.seeds!r} is not comma-separated whole numbers") from None
+    terrain_table(args.sweep, args.condition, seeds)
     if args.against:
         if ":" not in args.against:
             raise SystemExit(f"error: --against {args.against!r} is not SWEEP_FOLDER:CONDITION")
         folder, other = args.against.rsplit(":", 1)
         this = f"{args.sweep}:{args.condition}"
-        paired(this, verdicts(args.sweep, args.condition), args.against, verdicts(Path(folder), other))
+        paired(this, verdicts(args.sweep, args.condition, seeds), args.against, verdicts(Path(folder), other, seeds))
 
 
 if __name__ == "__main__":
