@@ -45,7 +45,7 @@ def main() -> int:
         trials = [f"{condition}-seed{s}" for s in seeds]
         fixed = episodes[(episodes["trial"] == trials[0]) & (episodes["controller"] == FIXED)]
         members = {t: episodes[(episodes["trial"] == t) & (episodes["controller"] == "policy")] for t in trials}
-        beaten = {name: _beaten(pd.concat([mine.assign(controller=name), fixed]), name, terrains)}
+        beaten = {name: _beaten(pd.concat([mine, fixed]), name, terrains)}  # probe.py names the controller
         beaten |= {t: _beaten(pd.concat([members[t].assign(controller=t), fixed]), t, terrains) for t in trials}
         board = pd.DataFrame(beaten).astype(int)
         success = pd.DataFrame({who: rows.groupby("terrain")["success"].mean()
