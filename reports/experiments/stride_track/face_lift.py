@@ -4,7 +4,8 @@ For every trial of one condition of a sweep: the highest b (rad) the policy's CP
 between 0.2 and 0.5 m from the start, the approach in which the front feet meet a first face at 1.0 m (the single,
 wide, tall and low blocks and extra blocks; an episode that fails there stalls with the base at 0.45-0.50 m; the
 window does not fit block_near or block_far), on each episode of the named terrains, beside that episode's
-success. It reads each trial's evaluation traces
+success. The sweep's own `b_before_block` cannot say this: it is empty for an episode that stalls at the face,
+which are the episodes in question. It reads each trial's evaluation traces
 (`<data>/sweeps/NAME/TRIAL/eval/cpg_traces.csv.gz`, not committed) and the sweep's `episodes.csv`.
 
     .venv/bin/python reports/experiments/stride_track/face_lift.py reports/sweeps/stride_track pinned_stride60
