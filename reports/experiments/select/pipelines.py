@@ -34,12 +34,13 @@ REPRO_CONTROLLERS = ("policy", "best_fixed", "open_loop")  # the controllers a s
 SINGLE, BEST = "single", "best3"
 
 
-def load_records(sweeps: list[Path]) -> list[dict]:
+def load_records(sweeps: list[Path], condition: str | None = None) -> list[dict]:
+    """Every complete trial record of the sweeps (of `condition` only, if named)."""
     records = []
     for sweep in sweeps:
         for path in sorted(sweep.glob("*/result.json")):
             record = json.loads(path.read_text())
-            if record.get("status") == "ok":
+            if record.get("status") == "ok" and condition in (None, record.get("condition")):
                 records.append({**record, "data": f"data/sweeps/{sweep.name}/{path.parent.name}"})
     return records
 
@@ -75,10 +76,13 @@ def repro_pipeline(reports: Path, episodes: int) -> tuple[int, list[float], dict
 
 
 def main(sweeps: list[Path], validations: list[Path], flat: str = "flat", repro: Path | None = None,
-         repro_episodes: int = 10, csv_first: bool = False) -> None:
+         repro_episodes: int = 10, csv_first: bool = False, condition: str | None = None) -> None:
     csv = (pd.concat([pd.read_csv(v) for v in validations]).groupby("trial")["env_return"].mean()
            if validations else pd.Series(dtype=float))
-    records = load_records(sweeps)
+    records = load_records(sweeps, condition)
+    if not records:
+        raise SystemExit(f"error: no complete trials{f' of condition {condition!r}' if condition else ''} in "
+                         f"{', '.join(map(str, sweeps))}")
     by_seed = {}
     for record in records:
         record["v_return"] = validation_return(record, csv, csv_first)
@@ -156,5 +160,7 @@ if __name__ == "__main__":
     ap.add_argument("--csv-first", action="store_true",
                     help="score trials by the --validation CSVs even where their records carry their own returns "
                          "(another validation set than train-ppo's)")
+    ap.add_argument("--condition", help="read only this condition's trials (a sweep of several conditions)")
     a = ap.parse_args()
-    main(a.sweeps, a.validation, repro=a.repro, repro_episodes=a.episodes, csv_first=a.csv_first)
+    main(a.sweeps, a.validation, repro=a.repro, repro_episodes=a.episodes, csv_first=a.csv_first,
+         condition=a.condition)
