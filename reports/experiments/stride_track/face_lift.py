@@ -9,6 +9,10 @@ which are the episodes in question. It reads each trial's evaluation traces
 (`<data>/sweeps/NAME/TRIAL/eval/cpg_traces.csv.gz`, not committed) and the sweep's `episodes.csv`.
 
     .venv/bin/python reports/experiments/stride_track/face_lift.py reports/sweeps/stride_track pinned_stride60
+
+`--at-face` reads instead the lowest b with the base 0.40-0.50 m from the start, as the front feet (0.47 m ahead of
+the base) reach a face at 1.0 m: a lift raised early and let fall before the face shows a high first table and a
+low second one.
 """
 
 import argparse
@@ -18,13 +22,15 @@ from pathlib import Path
 import pandas as pd
 
 WINDOW = (0.2, 0.5)  # m of base travel: the approach to a face at the suite's default block position
+AT_FACE = (0.4, 0.5)  # m of base travel: the front feet reach a face at 1.0 m
 
 
-def face_lift(traces: pd.DataFrame, terrains: list[str]) -> pd.Series:
-    """The policy's highest b in WINDOW, per (terrain, episode)."""
+def face_lift(traces: pd.DataFrame, terrains: list[str], window: tuple[float, float] = WINDOW,
+              stat: str = "max") -> pd.Series:
+    """The policy's highest (stat "max") or lowest ("min") b in `window`, per (terrain, episode)."""
     t = traces[(traces.controller == "policy") & traces.terrain.isin(terrains)]
-    t = t[(t.distance > WINDOW[0]) & (t.distance < WINDOW[1])]
-    return t.groupby(["terrain", "episode"]).b.max()
+    t = t[(t.distance > window[0]) & (t.distance < window[1])]
+    return t.groupby(["terrain", "episode"]).b.agg(stat)
 
 
 def main() -> None:
@@ -33,7 +39,9 @@ def main() -> None:
     ap.add_argument("condition")
     ap.add_argument("--data", type=Path, default=Path("data/sweeps"), help="where the sweeps' trial data live")
     ap.add_argument("--terrain", action="append", help="terrains to read (default: single_block, wide_block)")
+    ap.add_argument("--at-face", action="store_true", help="the lowest b with the base 0.40-0.50 m from the start")
     args = ap.parse_args()
+    window, stat, word = (AT_FACE, "min", "lowest") if args.at_face else (WINDOW, "max", "highest")
     terrains = args.terrain or ["single_block", "wide_block"]
     episodes_csv = args.sweep / "episodes.csv"
     if not episodes_csv.is_file():
@@ -50,11 +58,11 @@ def main() -> None:
         path = args.data / args.sweep.name / str(trial) / "eval" / "cpg_traces.csv.gz"
         if not path.is_file():
             sys.exit(f"error: {path} not found: the traces are not committed; rerun the sweep's trial to make them")
-        lift = face_lift(pd.read_csv(path), terrains).rename("b_max")
+        lift = face_lift(pd.read_csv(path), terrains, window, stat).rename("b")
         crossed = rows.set_index(["terrain", "episode"]).success.astype(bool).rename("crossed")
         table = pd.concat([lift, crossed], axis=1, join="inner")
-        print(f"{trial}: highest b with the base {WINDOW[0]}-{WINDOW[1]} m from the start, and crossed (+) or not (-)")
-        cells = table.apply(lambda r: f"{r.b_max:.2f}{'+' if r.crossed else '-'}", axis=1).unstack("episode")
+        print(f"{trial}: {word} b with the base {window[0]}-{window[1]} m from the start, and crossed (+) or not (-)")
+        cells = table.apply(lambda r: f"{r.b:.2f}{'+' if r.crossed else '-'}", axis=1).unstack("episode")
         print(cells.to_string(), end="\n\n")
 
 
