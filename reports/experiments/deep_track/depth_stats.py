@@ -1,6 +1,7 @@
 """How often a training distribution's block courses open with a deep block, and how many blocks they hold.
 
-    .venv/bin/python reports/experiments/deep_track/depth_stats.py varied_open reports/experiments/deep_track/varied_open_deep.yaml
+    .venv/bin/python reports/experiments/deep_track/depth_stats.py varied_open \
+        reports/experiments/deep_track/varied_open_deep.yaml
 
 The height map reaches 1.4 m ahead, so as the lift begins (about 0.5 m before a face) a block 0.9 m deep or more
 fills the map from its face on, as the suite's wide block (1.0 m) does. Draws 20000 courses per terrain at
