@@ -1,4 +1,4 @@
-"""Score trained policies on a validation set drawn from their training distribution (`varied`), not the suite.
+"""Score trained policies on a validation set drawn from a training distribution (`varied` by default), not the suite.
 
     .venv/bin/python reports/experiments/select/validate.py OUT.csv TRIAL_DIR [TRIAL_DIR ...] [--episodes 40] \
         [--terrain varied]
