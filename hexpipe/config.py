@@ -2,6 +2,10 @@
 
 `load_params` is called once, by the CLI; everything below it receives the typed sections. Errors are
 `ConfigError` with one line naming the key at fault and what is allowed.
+
+The code defaults are params.yaml's but for the gait: here a and omega are free (the general CPG that the unit
+tests and library users get), while params.yaml pins them at the fixed gait's with the stride reflex and a teacher
+of 60 (cpg.*, task.lift_teacher, task.stride_reflex: the pipeline's default since `pinned_stride60`).
 """
 
 from __future__ import annotations
@@ -98,7 +102,7 @@ class CpgConfig(_Section):
     initial: Triple = (0.25, 0.2, 1.5 * math.pi)
     # floors a >= 0.25 rad, b >= 0.2 rad and omega >= pi rad/s (the paper's bounds: 0.05, 0.05, pi/2): policies that
     # failed sat on them, dragging their feet, crawling (reports/experiments, "floors") or, on rough ground, marching
-    # in place with a at 0.05 ("floor25"); `holding` lowers them for a fixed gait
+    # in place with a at 0.05 ("floor25"); `holding` widens the bounds to a fixed gait
     lower: Triple = (0.25, 0.2, math.pi)
     # omega <= 2 pi (a 1 Hz stride): above it the rate-limited shoulder cannot reach the lift b asks for, and a
     # 100k-step policy that pins omega at 3 pi crossed the training block in only 75% of episodes
@@ -135,10 +139,12 @@ class CpgConfig(_Section):
         return self.rate_limit if self.fall_rate_limit is None else self.fall_rate_limit
 
     def holding(self, gait: Triple) -> CpgConfig:
-        """These settings with `gait` (a, b, omega) as the initial parameters and the floors lowered to it where it
-        lies below them: the floors bound what a policy may choose, not an open-loop gait it is compared with."""
+        """These settings with `gait` (a, b, omega) as the initial parameters, the floors lowered and the ceilings
+        raised to it where it lies outside them: the bounds limit what a policy may choose (a default that pins a and
+        omega sets both to one value), not an open-loop gait it is compared with, which must run as asked."""
         lower = tuple(min(lo, g) for lo, g in zip(self.lower, gait, strict=True))
-        return self.model_copy(update={"initial": tuple(gait), "lower": lower})
+        upper = tuple(max(hi, g) for hi, g in zip(self.upper, gait, strict=True))
+        return self.model_copy(update={"initial": tuple(gait), "lower": lower, "upper": upper})
 
 
 def _known_sensor(name: str) -> str:

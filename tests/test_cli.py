@@ -43,7 +43,7 @@ def test_overrides_are_typed_and_nested():
         ("ppo.foo=1", "unknown key 'ppo.foo'; allowed here: batch_size"),
         ("ppo.n_envs=zero", "ppo.n_envs"),
         ("ppo.n_envs=0", "greater than or equal to 1"),
-        ("cpg.initial=[0.25, 0.9, 4.0]", "b: need 0 < lower"),
+        ("cpg.initial=[0.4, 0.9, 3.141593]", "b: need 0 < lower"),
         ("cpg.fall_rate_limit=[1.0, 0.0, 10.0]", "fall_rate_limit must be positive"),
         ("sim.control_hz=7", "control_hz=7 must divide physics_hz=120"),
         ("task.sensors=[lidar]", "task.sensors[0]"),

@@ -185,12 +185,27 @@ def test_a_first_order_command_is_the_rate_at_once_and_zero_holds():
     assert np.allclose(coasting[-1], rates[-1])  # under order 2 the same zero command keeps the rate
 
 
-def test_holding_lowers_only_the_floors_a_fixed_gait_needs():
+def test_holding_widens_only_the_bounds_a_fixed_gait_needs():
     cfg = CpgConfig(lower=(0.05, 0.2, math.pi), initial=(0.25, 0.2, 1.5 * math.pi))  # the floors sweeps' bounds
     held = cfg.holding((0.25, 0.15, 1.5 * math.pi))
     assert held.initial == (0.25, 0.15, 1.5 * math.pi)
     assert held.lower == (cfg.lower[0], 0.15, cfg.lower[2]) and held.upper == cfg.upper
     assert cfg.holding((0.3, 0.4, 4.0)).lower == cfg.lower
+    pinned = CpgConfig(lower=(0.4, 0.2, math.pi), upper=(0.4, 0.5, math.pi), initial=(0.4, 0.2, math.pi))
+    fast = pinned.holding((0.2, 0.3, 2 * math.pi))  # a grid gait shorter and faster than the pinned default
+    assert fast.lower == (0.2, 0.2, math.pi) and fast.upper == (0.4, 0.5, 2 * math.pi)
+
+
+def test_a_fixed_gait_above_the_ceilings_holds_through_its_episode():
+    """The CPG clips to its bounds each step: a gait above cpg.upper would be run as another gait unless `holding`
+    raised the ceilings to it (the grid's omega = 2 pi under a default that pins omega at pi)."""
+    pinned = CpgConfig(lower=(0.4, 0.2, math.pi), upper=(0.4, 0.5, math.pi), initial=(0.4, 0.2, math.pi))
+    gait = np.array([0.3, 0.45, 2 * math.pi])
+    held = pinned.holding(tuple(gait))
+    path, _ = parameter_path(gait, np.zeros(3), np.zeros(3), DT, 24, held)
+    assert np.allclose(path, gait)
+    clipped, _ = parameter_path(gait, np.zeros(3), np.zeros(3), DT, 24, pinned)
+    assert not np.allclose(clipped[-1], gait)  # without it, omega falls to the pinned pi
 
 
 def test_swing_lifts_and_stance_holds_the_ik_angles():

@@ -195,12 +195,14 @@ def test_a_low_gait_stops_with_its_front_feet_at_the_face(gait, termination, leg
     assert row["b_mean"] == pytest.approx(gait[1])
 
 
-def test_grid_gaits_may_lie_below_the_floors_but_not_above_the_ceiling():
+def test_grid_gaits_may_lie_outside_the_cpg_bounds_but_must_be_positive():
     params = load_params(ROOT / "params.yaml", ["cpg.lower=[0.25,0.2,3.141593]"])
-    assert grid_gaits(params.model_copy(update={"eval": params.eval.model_copy(update={"grid_a": (0.2, 0.4)})}))
-    for key, values in (("grid_a", (0.2, 0.45)), ("grid_b", (0.6,))):
+    wide = {"grid_a": (0.2, 0.45), "grid_b": (0.6,), "grid_omega": (2 * math.pi,)}  # below floors, above ceilings
+    assert grid_gaits(params.model_copy(update={"eval": params.eval.model_copy(update=wide)})) == [
+        (0.2, 0.6, 2 * math.pi), (0.45, 0.6, 2 * math.pi)]
+    for key, values in (("grid_a", (0.2, 0.0)), ("grid_b", (-0.1,))):
         bad = params.model_copy(update={"eval": params.eval.model_copy(update={key: values})})
-        with pytest.raises(ConfigError, match=rf"eval.{key}: \[{values[-1]}\] outside the CPG bounds"):
+        with pytest.raises(ConfigError, match=rf"eval.{key}: \[{values[-1]}\] must be positive"):
             grid_gaits(bad)
 
 
