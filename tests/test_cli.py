@@ -22,9 +22,10 @@ def _flat(tree, prefix=""):
 
 
 # Where the pipeline's params.yaml departs from the code defaults, on purpose (hexpipe/config.py's docstring): it pins
-# a and omega at the fixed gait's, with the stride reflex and a teacher of 60 (`pinned_stride60`, the default since
-# 2026-12-03), while the code keeps the general CPG, a and omega free, for the unit tests and library users.
-PIPELINE_ONLY = {"cpg.initial.0": 0.4, "cpg.initial.2": math.pi, "cpg.lower.0": 0.4, "cpg.upper.2": math.pi,
+# a at the fixed gait's, omega in [pi, 1.25 pi], with the stride reflex and a teacher of 60 (`pinned_stride60` since
+# 2026-12-03, `cycle125` since 2026-12-04), while the code keeps the general CPG, a and omega free, for the unit tests
+# and library users.
+PIPELINE_ONLY = {"cpg.initial.0": 0.4, "cpg.initial.2": math.pi, "cpg.lower.0": 0.4, "cpg.upper.2": 1.25 * math.pi,
                  "task.lift_teacher": 60.0, "task.stride_reflex": 0.35}
 
 
