@@ -39,10 +39,9 @@ def main(pipelines: dict[str, Path], flat: str = "flat") -> None:
     for name, reports in pipelines.items():
         metrics = json.loads((reports / "eval" / "metrics.json").read_text())
         mine = judged[judged["condition"] == name]
-        beaten = [k.split("/")[-1] for k, v in metrics.items()
-                  if k.startswith("verdict/policy/") and k.count("/") == 2 and v == 1
-                  and k.split("/")[-1] not in ("beats_best_fixed_everywhere", "terrains_beaten", "terrains")]
-        suite = policy[(policy["condition"] == name) & (policy["terrain"] != flat)]["success"]
+        mine_policy = policy[policy["condition"] == name]
+        beaten = [t for t in dict.fromkeys(mine_policy["terrain"]) if metrics.get(f"verdict/policy/{t}") == 1]
+        suite = mine_policy[mine_policy["terrain"] != flat]["success"]
         print(f"{name}: {int(mine['met'].sum())} of {len(mine)} targets met (missed: "
               f"{', '.join(mine.loc[~mine['met'], 'target']) or 'none'}); beats the fixed gait on "
               f"{metrics['verdict/policy/terrains_beaten']} of {metrics['verdict/policy/terrains']} terrains "
