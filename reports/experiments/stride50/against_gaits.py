@@ -1,0 +1,99 @@
+"""Terrains beaten per sweep trial against each of several fixed gaits, on the same evaluation episodes.
+
+    .venv/bin/python reports/experiments/stride50/against_gaits.py reports/sweeps/stride50 \
+        --gait 0.4,0.4,3.141593 --gait 0.5,0.4,3.141593 [--condition cycle125 ...] [--workers 2]
+
+A sweep's verdict judges its policies against one gait, the grid's best. This readout asks how the count moves
+with the bar: it runs each gait on evaluate's episodes (seeds eval.seed onwards, as many a terrain as the trials
+ran), then applies evaluate's own verdict (`hexpipe.evaluation.metrics.verdict`) to every trial's policy episodes
+(its result.json) against each gait. Run it on the machine the sweep ran on: fixed-gait episodes differ across CPU
+kinds (README, Reproducibility).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+import pandas as pd
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "ceiling"))
+from episodes import checked_inputs, evaluate_episode, parse_gait  # ceiling/episodes.py, on the path above
+
+from hexpipe.evaluation.controllers import ControllerSpec
+from hexpipe.evaluation.metrics import summarise, verdict
+
+RAISED = "cpg.upper=[0.5,0.8,6.283185]"  # the ceiling raised so that any gait of the list can be held
+
+
+def _episode(job: tuple[tuple[float, float, float], str, int]) -> dict:
+    gait, terrain, index = job
+    row = evaluate_episode(ControllerSpec("best_fixed", gait=gait), terrain, index, (RAISED,))
+    return {**row, "controller": _label(gait), "terrain": terrain}
+
+
+def _label(gait: tuple[float, float, float]) -> str:
+    return f"a={gait[0]:.2f} b={gait[1]:.2f} omega={gait[2]:.2f}"
+
+
+def _trials(sweep: Path, conditions: list[str]) -> dict[str, pd.DataFrame]:
+    """trial name -> its policy episodes, for every finished trial of the named conditions (all when none)."""
+    out = {}
+    for record in sorted(sweep.glob("*/result.json")):
+        result = json.loads(record.read_text())
+        if conditions and result["condition"] not in conditions:
+            continue
+        rows = pd.DataFrame([e for e in result["episodes"] if e["controller"] == "policy"])
+        if len(rows):
+            out[record.parent.name] = rows
+    if not out:
+        raise SystemExit(f"error: no finished trial in {sweep} (want */result.json)")
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("sweep", type=Path)
+    ap.add_argument("--gait", dest="gaits", action="append", required=True, metavar="A,B,OMEGA")
+    ap.add_argument("--condition", dest="conditions", action="append", default=[])
+    ap.add_argument("--workers", type=int, default=2)
+    a = ap.parse_args()
+    gaits = [parse_gait(g) for g in a.gaits]
+    trials = _trials(a.sweep, a.conditions)
+    first = next(iter(trials.values()))
+    terrains = list(dict.fromkeys(first["terrain"]))
+    episodes = int(first.groupby("terrain").size().max())
+    checked_inputs((RAISED,), terrains)
+    jobs = [(g, t, i) for g in gaits for t in terrains for i in range(episodes)]
+    with ProcessPoolExecutor(a.workers) as pool:
+        fixed = pd.DataFrame(list(pool.map(_episode, jobs)))
+    labels = [_label(g) for g in gaits]
+    beaten, per_terrain = {}, {}
+    for name, rows in trials.items():
+        table = summarise(pd.concat([rows, fixed]), terrains, ["policy", *labels])
+        for label in labels:
+            calls = verdict(table, terrains, baseline=label)
+            beaten[(name, label)] = sum(v.beats for v in calls)
+            for v in calls:
+                per_terrain[(v.terrain, label)] = per_terrain.get((v.terrain, label), 0) + int(v.beats)
+    counts = pd.Series(beaten).unstack()[labels]
+    with pd.option_context("display.width", 200):
+        print(f"fixed gaits on {episodes} episodes a terrain: success, time to goal (s), cost of transport")
+        arrived = fixed[fixed["success"]]
+        print(pd.concat({"success": fixed.pivot_table(index="terrain", columns="controller", values="success"),
+                         "time": arrived.pivot_table(index="terrain", columns="controller", values="time"),
+                         "cost": arrived.pivot_table(index="terrain", columns="controller",
+                                                     values="cost_of_transport")}, axis=1)
+              .reindex(terrains).round(2).to_string())
+        print("\nterrains beaten of", len(terrains), "per trial, against each gait")
+        print(counts.to_string())
+        print("mean", " ".join(f"{label}: {counts[label].mean():.2f}" for label in labels))
+        print("\ntrials that beat each gait, per terrain")
+        print(pd.Series(per_terrain).unstack()[labels].reindex(terrains).fillna(0).astype(int).to_string())
+
+
+if __name__ == "__main__":
+    main()
