@@ -39,8 +39,9 @@ def _label(gait: tuple[float, float, float]) -> str:
     return f"a={gait[0]:.2f} b={gait[1]:.2f} omega={gait[2]:.2f}"
 
 
-def _trials(sweep: Path, conditions: list[str]) -> dict[str, pd.DataFrame]:
-    """trial name -> its policy episodes, for every finished trial of the named conditions (all when none)."""
+def _trials(sweep: Path, conditions: list[str]) -> dict[tuple[str, str], pd.DataFrame]:
+    """(condition, trial name) -> its policy episodes, for every finished trial of the named conditions (all when
+    none)."""
     out = {}
     for record in sorted(sweep.glob("*/result.json")):
         result = json.loads(record.read_text())
@@ -48,7 +49,7 @@ def _trials(sweep: Path, conditions: list[str]) -> dict[str, pd.DataFrame]:
             continue
         rows = pd.DataFrame([e for e in result["episodes"] if e["controller"] == "policy"])
         if len(rows):
-            out[record.parent.name] = rows
+            out[(result["condition"], record.parent.name)] = rows
     if not out:
         raise SystemExit(f"error: no finished trial in {sweep} (want */result.json)")
     return out
@@ -72,14 +73,15 @@ def main() -> None:
         fixed = pd.DataFrame(list(pool.map(_episode, jobs)))
     labels = [_label(g) for g in gaits]
     beaten, per_terrain = {}, {}
-    for name, rows in trials.items():
+    for (condition, trial), rows in trials.items():
         table = summarise(pd.concat([rows, fixed]), terrains, ["policy", *labels])
         for label in labels:
             calls = verdict(table, terrains, baseline=label)
-            beaten[(name, label)] = sum(v.beats for v in calls)
+            beaten[(condition, trial, label)] = sum(v.beats for v in calls)
             for v in calls:
-                per_terrain[(v.terrain, label)] = per_terrain.get((v.terrain, label), 0) + int(v.beats)
-    counts = pd.Series(beaten).unstack()[labels]
+                key = (v.terrain, condition, label)
+                per_terrain[key] = per_terrain.get(key, 0) + int(v.beats)
+    counts = pd.Series(beaten).unstack()[labels].rename_axis(["condition", "trial"])
     with pd.option_context("display.width", 200):
         print(f"fixed gaits on {episodes} episodes a terrain: success, time to goal (s), cost of transport")
         arrived = fixed[fixed["success"]]
@@ -90,9 +92,11 @@ def main() -> None:
               .reindex(terrains).round(2).to_string())
         print("\nterrains beaten of", len(terrains), "per trial, against each gait")
         print(counts.to_string())
-        print("mean", " ".join(f"{label}: {counts[label].mean():.2f}" for label in labels))
-        print("\ntrials that beat each gait, per terrain")
-        print(pd.Series(per_terrain).unstack()[labels].reindex(terrains).fillna(0).astype(int).to_string())
+        print("\nmean per condition")
+        print(counts.groupby(level="condition").mean().round(2).to_string())
+        print("\ntrials that beat each gait, per terrain and condition")
+        beats = pd.Series(per_terrain).unstack([1, 2]).reindex(terrains).fillna(0).astype(int)
+        print(beats.to_string())
 
 
 if __name__ == "__main__":
