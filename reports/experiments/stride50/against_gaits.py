@@ -44,14 +44,19 @@ def _trials(sweep: Path, conditions: list[str]) -> dict[tuple[str, str], pd.Data
     none)."""
     out = {}
     for record in sorted(sweep.glob("*/result.json")):
-        result = json.loads(record.read_text())
-        if conditions and result["condition"] not in conditions:
+        try:
+            result = json.loads(record.read_text())
+            episodes, condition = result["episodes"], result["condition"]
+        except (json.JSONDecodeError, KeyError) as exc:
+            raise SystemExit(f"error: {record} is not a sweep trial's record ({exc})") from None
+        if conditions and condition not in conditions:
             continue
-        rows = pd.DataFrame([e for e in result["episodes"] if e["controller"] == "policy"])
+        rows = pd.DataFrame([e for e in episodes if e["controller"] == "policy"])
         if len(rows):
-            out[(result["condition"], record.parent.name)] = rows
+            out[(condition, record.parent.name)] = rows
     if not out:
-        raise SystemExit(f"error: no finished trial in {sweep} (want */result.json)")
+        wanted = f" of condition {', '.join(conditions)}" if conditions else ""
+        raise SystemExit(f"error: no finished trial{wanted} in {sweep} (want */result.json)")
     return out
 
 
