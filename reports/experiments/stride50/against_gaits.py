@@ -1,12 +1,14 @@
 """Terrains beaten per sweep trial against each of several fixed gaits, on the same evaluation episodes.
 
-    .venv/bin/python reports/experiments/stride50/against_gaits.py reports/sweeps/stride50 \
-        --gait 0.4,0.4,3.141593 --gait 0.5,0.4,3.141593 [--condition cycle125 ...] [--workers 2]
+    .venv/bin/python reports/experiments/stride50/against_gaits.py reports/sweeps/stride50 [more sweeps ...] \
+        --gait 0.4,0.4,3.141593 --gait 0.5,0.4,3.141593 [--condition cycle125 ...] [--paired A,B ...] [--workers 2]
 
 A sweep's verdict judges its policies against one gait, the grid's best. This readout asks how the count moves
 with the bar: it runs each gait on evaluate's episodes (seeds eval.seed onwards, as many a terrain as the trials
 ran), then applies evaluate's own verdict (`hexpipe.evaluation.metrics.verdict`) to every trial's policy episodes
-(its result.json) against each gait. Run it on the machine the sweep ran on: fixed-gait episodes differ across CPU
+(its result.json) against each gait. Several sweeps pool their trials (their evaluation episodes must be the same);
+--paired A,B adds, per gait, condition A's terrains beaten minus B's, seed by seed on the seeds both hold, with a
+95% bootstrap interval over seeds. Run it on the machine the sweep ran on: fixed-gait episodes differ across CPU
 kinds (README, Reproducibility).
 """
 
@@ -25,6 +27,7 @@ from episodes import checked_inputs, evaluate_episode, parse_gait  # ceiling/epi
 
 from hexpipe.evaluation.controllers import ControllerSpec
 from hexpipe.evaluation.metrics import summarise, verdict
+from hexpipe.sweep.stats import bootstrap_mean
 
 RAISED = "cpg.upper=[0.5,0.8,6.283185]"  # the ceiling raised so that any gait of the list can be held
 
@@ -39,36 +42,64 @@ def _label(gait: tuple[float, float, float]) -> str:
     return f"a={gait[0]:.2f} b={gait[1]:.2f} omega={gait[2]:.2f}"
 
 
-def _trials(sweep: Path, conditions: list[str]) -> dict[tuple[str, str], pd.DataFrame]:
+def _trials(sweeps: list[Path], conditions: list[str]) -> tuple[dict[tuple[str, str], pd.DataFrame], dict]:
     """(condition, trial name) -> its policy episodes, for every finished trial of the named conditions (all when
-    none)."""
-    out = {}
-    for record in sorted(sweep.glob("*/result.json")):
+    none) in the sweeps; and (condition, trial name) -> its training seed."""
+    out, seeds = {}, {}
+    for record in sorted(r for sweep in sweeps for r in sweep.glob("*/result.json")):
         try:
             result = json.loads(record.read_text())
-            episodes, condition = result["episodes"], result["condition"]
-        except (json.JSONDecodeError, KeyError) as exc:
+            episodes, condition, seed = result["episodes"], result["condition"], int(result["seed"])
+        except (json.JSONDecodeError, KeyError, TypeError, ValueError) as exc:
             raise SystemExit(f"error: {record} is not a sweep trial's record ({exc})") from None
         if conditions and condition not in conditions:
             continue
+        key = (condition, record.parent.name)
+        if key in out:
+            raise SystemExit(f"error: trial {key[1]} of condition {condition} is in more than one sweep; "
+                             "name one sweep or one --condition")
         rows = pd.DataFrame([e for e in episodes if e["controller"] == "policy"])
         if len(rows):
-            out[(condition, record.parent.name)] = rows
+            out[key], seeds[key] = rows, seed
     if not out:
         wanted = f" of condition {', '.join(conditions)}" if conditions else ""
-        raise SystemExit(f"error: no finished trial{wanted} in {sweep} (want */result.json)")
-    return out
+        where = ", ".join(str(s) for s in sweeps)
+        raise SystemExit(f"error: no finished trial{wanted} in {where} (want */result.json)")
+    return out, seeds
+
+
+def _paired(counts: pd.DataFrame, seeds: dict, pair: str) -> list[str]:
+    """Lines: per gait, condition A's terrains beaten minus B's over the seeds both hold, with its interval."""
+    a, sep, b = pair.partition(",")
+    held = set(counts.index.get_level_values("condition"))
+    if not sep or a not in held or b not in held:
+        raise SystemExit(f"error: --paired {pair!r}: want A,B, two conditions of {sorted(held)}")
+    by_seed = counts.copy()
+    by_seed.index = [(c, seeds[(c, t)]) for c, t in counts.index]
+    common = sorted({s for c, s in by_seed.index if c == a} & {s for c, s in by_seed.index if c == b})
+    if not common:
+        raise SystemExit(f"error: --paired {pair!r}: the two conditions share no seed")
+    lines = [f"\n{a} minus {b}, terrains beaten, paired over seeds {', '.join(map(str, common))}"]
+    for gait in counts.columns:
+        gap = [by_seed.loc[[(a, s)], gait].iloc[0] - by_seed.loc[[(b, s)], gait].iloc[0] for s in common]
+        if len(gap) > 1:
+            est = bootstrap_mean([pd.Series(gap).to_numpy(float)])
+            lines.append(f"  {gait}: {est.value:+.2f} [{est.low:+.2f}, {est.high:+.2f}]")
+        else:
+            lines.append(f"  {gait}: {gap[0]:+.2f} (one seed: no interval)")
+    return lines
 
 
 def main() -> None:
     ap = argparse.ArgumentParser()
-    ap.add_argument("sweep", type=Path)
+    ap.add_argument("sweeps", type=Path, nargs="+", metavar="sweep")
     ap.add_argument("--gait", dest="gaits", action="append", required=True, metavar="A,B,OMEGA")
     ap.add_argument("--condition", dest="conditions", action="append", default=[])
+    ap.add_argument("--paired", action="append", default=[], metavar="A,B")
     ap.add_argument("--workers", type=int, default=2)
     a = ap.parse_args()
     gaits = [parse_gait(g) for g in a.gaits]
-    trials = _trials(a.sweep, a.conditions)
+    trials, seeds = _trials(a.sweeps, a.conditions)
     first = next(iter(trials.values()))
     terrains = list(dict.fromkeys(first["terrain"]))
     episodes = int(first.groupby("terrain").size().max())
@@ -102,6 +133,8 @@ def main() -> None:
         print("\ntrials that beat each gait, per terrain and condition")
         beats = pd.Series(per_terrain).unstack([1, 2]).reindex(terrains).fillna(0).astype(int)
         print(beats.to_string())
+        for pair in a.paired:
+            print("\n".join(_paired(counts, seeds, pair)))
 
 
 if __name__ == "__main__":
