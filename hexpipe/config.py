@@ -140,8 +140,8 @@ class CpgConfig(_Section):
 
     def holding(self, gait: Triple) -> CpgConfig:
         """These settings with `gait` (a, b, omega) as the initial parameters, the floors lowered and the ceilings
-        raised to it where it lies outside them: the bounds limit what a policy may choose (a default that pins a and
-        omega sets both to one value), not an open-loop gait it is compared with, which must run as asked."""
+        raised to it where it lies outside them: the bounds limit what a policy may choose (a default that pins a sets
+        its floor and ceiling to one value), not an open-loop gait it is compared with, which must run as asked."""
         lower = tuple(min(lo, g) for lo, g in zip(self.lower, gait, strict=True))
         upper = tuple(max(hi, g) for hi, g in zip(self.upper, gait, strict=True))
         return self.model_copy(update={"initial": tuple(gait), "lower": lower, "upper": upper})
@@ -455,7 +455,7 @@ class EvalConfig(_Section):
     terrain_files: tuple[str, ...] = ()
     episodes: PositiveInt = 20
     seed: int = 1000
-    grid_a: tuple[PositiveFloat, ...] = (0.2, 0.3, 0.4)
+    grid_a: tuple[PositiveFloat, ...] = (0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8)  # up to the hip yaw stop (0.8 rad)
     grid_b: tuple[PositiveFloat, ...] = (0.3, 0.4, 0.5)
     grid_omega: tuple[PositiveFloat, ...] = (1.0 * math.pi, 1.5 * math.pi, 2.0 * math.pi)
     record_video: bool = True

@@ -105,7 +105,7 @@ def learned_controllers(params: Params) -> tuple[list[ControllerSpec], dict[str,
 def grid_gaits(params: Params) -> list[Gait]:
     """Every (a, b, omega) of the grid; ConfigError if a value is not positive or an axis is empty. Values outside
     cpg.lower and cpg.upper are fine: a fixed gait runs with the bounds widened to it (`run_episode`), so a default
-    that pins a and omega is still compared with the faster and shorter gaits."""
+    that pins the stride is still compared with longer, shorter and faster gaits."""
     cfg = params.eval
     axes = {"grid_a": cfg.grid_a, "grid_b": cfg.grid_b, "grid_omega": cfg.grid_omega}
     for key, values in axes.items():
