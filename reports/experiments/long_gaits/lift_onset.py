@@ -19,7 +19,10 @@ from pathlib import Path
 
 import pandas as pd
 
-FACES = {"single_block": 1.0, "tall_block": 1.0, "low_block": 1.0, "block_near": 0.6, "block_far": 1.6}
+from hexpipe.sim.terrain.recipes import SCENARIOS
+
+ONE_FACE = ("single_block", "tall_block", "low_block", "block_near", "block_far")  # one 0.3 m deep block each
+FACES = {name: SCENARIOS[name].boxes[0].face for name in ONE_FACE}  # m: the block's near face along x
 FRONT_REACH = 0.47  # m: the front feet ahead of the base at the start (terrain recipes' face check)
 
 
