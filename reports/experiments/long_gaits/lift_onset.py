@@ -34,7 +34,10 @@ def _episodes(source: str) -> pd.DataFrame:
                          "DATA_DIR/CONDITION-seed*/eval/cpg_traces.csv.gz")
     frames = []
     for path in paths:
-        d = pd.read_csv(path)
+        try:
+            d = pd.read_csv(path, usecols=["terrain", "controller", "episode", "time", "distance", "lift"])
+        except (OSError, ValueError, EOFError) as exc:  # unreadable, truncated, or a column missing
+            raise SystemExit(f"error: {path}: not a sweep trial's cpg traces ({exc})") from None
         d = d[(d["controller"] == "policy") & d["terrain"].isin(FACES)]
         frames.append(d.assign(condition=condition, trial=path.parents[1].name))
     return pd.concat(frames)
@@ -48,9 +51,9 @@ def _lead(steps: pd.DataFrame, threshold: float) -> dict:
     before = steps[(steps["distance"] < meet) & (steps["distance"] > meet - 1.0)]
     up = before[before["lift"] >= threshold]
     if up.empty:
-        return {"lead_m": float("nan"), "lead_s": float("nan"), "arrived": len(reached) > 0}
+        return {"lead_m": float("nan"), "lead_s": float("nan")}
     first = up.iloc[0]
-    return {"lead_m": meet - first["distance"], "lead_s": t_meet - first["time"], "arrived": len(reached) > 0}
+    return {"lead_m": meet - first["distance"], "lead_s": t_meet - first["time"]}
 
 
 def main() -> None:

@@ -74,16 +74,15 @@ def _paired(counts: pd.DataFrame, seeds: dict, pair: str) -> list[str]:
     held = set(counts.index.get_level_values("condition"))
     if not sep or a not in held or b not in held:
         raise SystemExit(f"error: --paired {pair!r}: want A,B, two conditions of {sorted(held)}")
-    by_seed = counts.copy()
-    by_seed.index = [(c, seeds[(c, t)]) for c, t in counts.index]
-    common = sorted({s for c, s in by_seed.index if c == a} & {s for c, s in by_seed.index if c == b})
-    if not common:
+    by_seed = counts.set_axis(pd.MultiIndex.from_tuples([(c, seeds[(c, t)]) for c, t in counts.index]))
+    gaps = (by_seed.loc[a] - by_seed.loc[b]).dropna().sort_index()  # rows: the seeds both conditions hold
+    if gaps.empty:
         raise SystemExit(f"error: --paired {pair!r}: the two conditions share no seed")
-    lines = [f"\n{a} minus {b}, terrains beaten, paired over seeds {', '.join(map(str, common))}"]
+    lines = [f"\n{a} minus {b}, terrains beaten, paired over seeds {', '.join(map(str, gaps.index))}"]
     for gait in counts.columns:
-        gap = [by_seed.loc[[(a, s)], gait].iloc[0] - by_seed.loc[[(b, s)], gait].iloc[0] for s in common]
+        gap = gaps[gait].to_numpy(float)
         if len(gap) > 1:
-            est = bootstrap_mean([pd.Series(gap).to_numpy(float)])
+            est = bootstrap_mean([gap])
             lines.append(f"  {gait}: {est.value:+.2f} [{est.low:+.2f}, {est.high:+.2f}]")
         else:
             lines.append(f"  {gait}: {gap[0]:+.2f} (one seed: no interval)")
