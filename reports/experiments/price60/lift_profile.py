@@ -1,0 +1,52 @@
+"""The policy's lift b along the course, per trial: where a draw lets the lift down past a block, and where not.
+
+    .venv/bin/python reports/experiments/price60/lift_profile.py DATA_DIR:CONDITION [...] [--terrain single_block]
+
+DATA_DIR is a sweep's data folder (data/sweeps/NAME, with CONDITION-seedN/eval/cpg_traces.csv.gz, which evaluate
+writes and the sweep does not commit). Per trial: the policy's mean b (rad) over every episode's control steps, in
+0.25 m bins of the body's forward distance from the start. single_block's face is at 1.0 m and its end at 1.3 m;
+issue 10's "open ground" there starts at 1.8 m (hexpipe/evaluation/episodes.py).
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+BIN = 0.25  # m
+
+
+def profile(traces: Path, terrain: str) -> pd.Series:
+    """Mean b per distance bin (m, the bin's start) on `terrain`, over the policy's episodes in `traces`."""
+    frame = pd.read_csv(traces)
+    frame = frame[(frame.controller == "policy") & (frame.terrain == terrain)]
+    if frame.empty:
+        raise SystemExit(f"error: no policy episodes on {terrain} in {traces}")
+    bins = np.floor(frame.distance.clip(0, 2.999) / BIN) * BIN
+    return frame.groupby(bins.round(2)).b.mean()
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("sources", nargs="+", help="DATA_DIR:CONDITION")
+    parser.add_argument("--terrain", default="single_block")
+    args = parser.parse_args()
+    rows = {}
+    for source in args.sources:
+        folder, _, condition = source.rpartition(":")
+        trials = sorted(Path(folder).glob(f"{condition}-seed*/eval/cpg_traces.csv.gz"))
+        if not trials:
+            raise SystemExit(f"error: no {condition}-seed*/eval/cpg_traces.csv.gz in {folder}")
+        for traces in trials:
+            rows[traces.parents[1].name] = profile(traces, args.terrain)
+    table = pd.DataFrame(rows).T
+    table.columns = [f"{c:.2f}" for c in table.columns]
+    print(f"mean b (rad) on {args.terrain} by the body's distance from the start (m, bin start), policy episodes")
+    print(table.round(2).to_string())
+
+
+if __name__ == "__main__":
+    main()
