@@ -4,7 +4,8 @@
 
 DATA_DIR is a sweep's data folder (data/sweeps/NAME, with CONDITION-seedN/eval/cpg_traces.csv.gz, which evaluate
 writes and the sweep does not commit). Per trial: the policy's mean b (rad) over every episode's control steps, in
-0.25 m bins of the body's forward distance from the start. single_block's face is at 1.0 m and its end at 1.3 m;
+0.25 m bins of the body's forward distance from the start, and its mean b over flat ground's episodes (the last
+column). single_block's face is at 1.0 m and its end at 1.3 m;
 issue 10's "open ground" there starts at 1.8 m (hexpipe/evaluation/episodes.py).
 """
 
@@ -20,13 +21,17 @@ BIN = 0.25  # m
 
 
 def profile(traces: Path, terrain: str) -> pd.Series:
-    """Mean b per distance bin (m, the bin's start) on `terrain`, over the policy's episodes in `traces`."""
+    """Mean b per distance bin (m, the bin's start) on `terrain`, and over flat ground ('flat'), of the policy's
+    episodes in `traces`."""
     frame = pd.read_csv(traces)
-    frame = frame[(frame.controller == "policy") & (frame.terrain == terrain)]
-    if frame.empty:
-        raise SystemExit(f"error: no policy episodes on {terrain} in {traces}")
-    bins = np.floor(frame.distance.clip(0, 2.999) / BIN) * BIN
-    return frame.groupby(bins.round(2)).b.mean()
+    frame = frame[frame.controller == "policy"]
+    course, flat = frame[frame.terrain == terrain], frame[frame.terrain == "flat"]
+    if course.empty or flat.empty:
+        raise SystemExit(f"error: no policy episodes on {terrain} or flat in {traces}")
+    bins = np.floor(course.distance.clip(0, 2.999) / BIN) * BIN
+    along = course.groupby(bins.round(2)).b.mean()
+    along.index = [f"{start:.2f}" for start in along.index]
+    return pd.concat([along, pd.Series({"flat": flat.b.mean()})])
 
 
 def main() -> None:
@@ -43,7 +48,6 @@ def main() -> None:
         for traces in trials:
             rows[traces.parents[1].name] = profile(traces, args.terrain)
     table = pd.DataFrame(rows).T
-    table.columns = [f"{c:.2f}" for c in table.columns]
     print(f"mean b (rad) on {args.terrain} by the body's distance from the start (m, bin start), policy episodes")
     print(table.round(2).to_string())
 
