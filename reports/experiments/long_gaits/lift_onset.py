@@ -26,7 +26,10 @@ FACES = {name: SCENARIOS[name].boxes[0].face for name in ONE_FACE}  # m: the blo
 FRONT_REACH = 0.47  # m: the front feet ahead of the base at the start (terrain recipes' face check)
 
 
-def _episodes(source: str) -> pd.DataFrame:
+def read_traces(source: str, terrains, columns: list[str]) -> pd.DataFrame:
+    """The policy's per-step traces on `terrains` from every trial of DATA_DIR:CONDITION (`columns` of
+    cpg_traces.csv.gz, with `terrain` and `controller` among them), tagged with condition and trial; a clear one-line
+    error for a malformed source, no trial, or an unreadable file."""
     folder, sep, condition = source.partition(":")
     paths = sorted(Path(folder).glob(f"{condition}-seed*/eval/cpg_traces.csv.gz"))
     if not sep or not paths:
@@ -35,10 +38,10 @@ def _episodes(source: str) -> pd.DataFrame:
     frames = []
     for path in paths:
         try:
-            d = pd.read_csv(path, usecols=["terrain", "controller", "episode", "time", "distance", "lift"])
+            d = pd.read_csv(path, usecols=columns)
         except (OSError, ValueError, EOFError) as exc:  # unreadable, truncated, or a column missing
             raise SystemExit(f"error: {path}: not a sweep trial's cpg traces ({exc})") from None
-        d = d[(d["controller"] == "policy") & d["terrain"].isin(FACES)]
+        d = d[(d["controller"] == "policy") & d["terrain"].isin(terrains)]
         frames.append(d.assign(condition=condition, trial=path.parents[1].name))
     return pd.concat(frames)
 
@@ -61,7 +64,8 @@ def main() -> None:
     ap.add_argument("sources", nargs="+", metavar="DATA_DIR:CONDITION")
     ap.add_argument("--threshold", type=float, default=0.45)
     a = ap.parse_args()
-    traces = pd.concat([_episodes(s) for s in a.sources])
+    traces = pd.concat([read_traces(s, FACES, ["terrain", "controller", "episode", "time", "distance", "lift"])
+                        for s in a.sources])
     final = traces.groupby(["condition", "trial", "terrain", "episode"])["distance"].max().rename("final")
     rows = []
     for key, steps in traces.groupby(["condition", "trial", "terrain", "episode"]):

@@ -5,29 +5,31 @@
 DATA_DIR is a sweep's data folder (data/sweeps/NAME, with CONDITION-seedN/eval/cpg_traces.csv.gz, which evaluate
 writes and the sweep does not commit). Per trial: the policy's mean b (rad) over every episode's control steps, in
 0.25 m bins of the body's forward distance from the start, and its mean b over flat ground's episodes (the last
-column). single_block's face is at 1.0 m and its end at 1.3 m;
-issue 10's "open ground" there starts at 1.8 m (hexpipe/evaluation/episodes.py).
+column). single_block's face is at 1.0 m and its end at 1.3 m; issue 10's "open ground" there starts at 1.8 m
+(hexpipe/evaluation/episodes.py).
 """
 
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "long_gaits"))
+from lift_onset import read_traces  # long_gaits/lift_onset.py, on the path above
+
 BIN = 0.25  # m
 
 
-def profile(traces: Path, terrain: str) -> pd.Series:
-    """Mean b per distance bin (m, the bin's start) on `terrain`, and over flat ground ('flat'), of the policy's
-    episodes in `traces`."""
-    frame = pd.read_csv(traces)
-    frame = frame[frame.controller == "policy"]
-    course, flat = frame[frame.terrain == terrain], frame[frame.terrain == "flat"]
+def profile(trial: pd.DataFrame, terrain: str) -> pd.Series:
+    """Mean b per distance bin (m, the bin's start) on `terrain`, and over flat ground ('flat'), of one trial's
+    policy steps."""
+    course, flat = trial[trial.terrain == terrain], trial[trial.terrain == "flat"]
     if course.empty or flat.empty:
-        raise SystemExit(f"error: no policy episodes on {terrain} or flat in {traces}")
+        raise SystemExit(f"error: {trial.trial.iloc[0]}: no policy episodes on {terrain} or flat")
     bins = np.floor(course.distance.clip(0, 2.999) / BIN) * BIN
     along = course.groupby(bins.round(2)).b.mean()
     along.index = [f"{start:.2f}" for start in along.index]
@@ -41,15 +43,11 @@ def main() -> None:
     args = parser.parse_args()
     rows = {}
     for source in args.sources:
-        folder, _, condition = source.rpartition(":")
-        trials = sorted(Path(folder).glob(f"{condition}-seed*/eval/cpg_traces.csv.gz"))
-        if not trials:
-            raise SystemExit(f"error: no {condition}-seed*/eval/cpg_traces.csv.gz in {folder}")
-        for traces in trials:
-            rows[traces.parents[1].name] = profile(traces, args.terrain)
-    table = pd.DataFrame(rows).T
+        traces = read_traces(source, (args.terrain, "flat"), ["terrain", "controller", "distance", "b"])
+        for name, trial in traces.groupby("trial", sort=True):
+            rows[name] = profile(trial, args.terrain)
     print(f"mean b (rad) on {args.terrain} by the body's distance from the start (m, bin start), policy episodes")
-    print(table.round(2).to_string())
+    print(pd.DataFrame(rows).T.round(2).to_string())
 
 
 if __name__ == "__main__":
