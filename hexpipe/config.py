@@ -4,9 +4,8 @@
 `ConfigError` with one line naming the key at fault and what is allowed.
 
 The code defaults are params.yaml's but for the gait: here a and omega are free (the general CPG that the unit
-tests and library users get), while params.yaml pins a at a long stride of 0.6 rad with the cycle in [pi, 1.25 pi],
-the stride reflex and a teacher of 60 that reads 1.05 m ahead (cpg.*, task.lift_teacher, task.stride_reflex,
-task.lift_reflex_zone: the pipeline's default since `stride60_ahead`).
+tests and library users get), while params.yaml pins them at the fixed gait's with the stride reflex and a teacher
+of 60 (cpg.*, task.lift_teacher, task.stride_reflex: the pipeline's default since `pinned_stride60`).
 """
 
 from __future__ import annotations
