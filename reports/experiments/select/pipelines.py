@@ -1,6 +1,7 @@
 """Whole pipelines with best of 3: for each pipeline seed p whose three candidates (p, p+1000, p+2000) were trained
 and evaluated as sweep trials, the one train-ppo keeps (the highest mean validation return), against the single
 run a pipeline without selection trains (candidate p), judged on issue 10's targets over pipelines.
+With --candidates K, best of K instead (seeds p, p+1000, ..., p+(K-1)*1000; only pipelines with all K trained).
 
     .venv/bin/python reports/experiments/select/pipelines.py reports/sweeps/epyc30 reports/sweeps/cand ... \
         [--validation reports/experiments/select/select30_validation.csv ...] [--csv-first] [--repro reports]
@@ -31,7 +32,7 @@ from hexpipe.sweep import tables
 
 CANDIDATES = 3
 REPRO_CONTROLLERS = ("policy", "best_fixed", "open_loop")  # the controllers a sweep trial evaluates
-SINGLE, BEST = "single", "best3"
+SINGLE = "single"
 
 
 def load_records(sweeps: list[Path], condition: str | None = None) -> list[dict]:
@@ -76,7 +77,9 @@ def repro_pipeline(reports: Path, episodes: int) -> tuple[int, list[float], dict
 
 
 def main(sweeps: list[Path], validations: list[Path], flat: str = "flat", repro: Path | None = None,
-         repro_episodes: int = 10, csv_first: bool = False, condition: str | None = None) -> None:
+         repro_episodes: int = 10, csv_first: bool = False, condition: str | None = None,
+         candidates: int = CANDIDATES) -> None:
+    best = f"best{candidates}"
     csv = (pd.concat([pd.read_csv(v) for v in validations]).groupby("trial")["env_return"].mean()
            if validations else pd.Series(dtype=float))
     records = load_records(sweeps, condition)
@@ -88,16 +91,16 @@ def main(sweeps: list[Path], validations: list[Path], flat: str = "flat", repro:
         record["v_return"] = validation_return(record, csv, csv_first)
         by_seed.setdefault(record["seed"], record)  # the first sweep named wins a seed run twice
     pipelines = sorted({s % SEED_STRIDE for s in by_seed
-                        if all(c in by_seed for c in candidate_seeds(s % SEED_STRIDE, CANDIDATES))})
+                        if all(c in by_seed for c in candidate_seeds(s % SEED_STRIDE, candidates))})
     rows, chosen_records, single_records = [], [], []
     for p in pipelines:
-        cands = [by_seed[c] for c in candidate_seeds(p, CANDIDATES)]
+        cands = [by_seed[c] for c in candidate_seeds(p, candidates)]
         returns = [c["v_return"] for c in cands]
         if any(np.isnan(returns)):
             print(f"pipeline {p}: a candidate has no validation return ({[c['data'] for c in cands]}); left out")
             continue
         kept = cands[choose(returns)]
-        chosen_records.append({**kept, "condition": BEST, "seed": p})
+        chosen_records.append({**kept, "condition": best, "seed": p})
         single_records.append({**cands[0], "condition": SINGLE, "seed": p})
         rows.append({"pipeline": p, **{f"return_p+{i * SEED_STRIDE}": round(r, 1) for i, r in enumerate(returns)},
                      "kept": kept["seed"]})
@@ -105,7 +108,9 @@ def main(sweeps: list[Path], validations: list[Path], flat: str = "flat", repro:
         p, returns, kept = repro_pipeline(repro, repro_episodes)
         if p in pipelines:
             raise SystemExit(f"error: pipeline {p} is both in the sweeps and --repro {repro}")
-        chosen_records.append({**kept, "condition": BEST, "seed": p})
+        if len(returns) != candidates:
+            raise SystemExit(f"error: --repro {repro} trained {len(returns)} candidates, not --candidates {candidates}")
+        chosen_records.append({**kept, "condition": best, "seed": p})
         if kept["seed"] == p:
             single_records.append({**kept, "condition": SINGLE, "seed": p})
         else:
@@ -118,12 +123,12 @@ def main(sweeps: list[Path], validations: list[Path], flat: str = "flat", repro:
     outcome = outcomes(episodes)
     print("\nper pipeline (policy, sweep-scale evaluation): suite = success on every terrain but flat ground")
     print(outcome.round(3).to_string())
-    print_targets(episodes, [BEST, SINGLE], flat, "pipelines", width=7)
+    print_targets(episodes, [best, SINGLE], flat, "pipelines", width=7)
     paired = outcome.pivot(index="pipeline", columns="condition")
     for column in ("lift", "suite", "extra"):
-        diff = (paired[column][BEST] - paired[column][SINGLE]).to_numpy(float)
+        diff = (paired[column][best] - paired[column][SINGLE]).to_numpy(float)
         known = diff[~np.isnan(diff)]  # a --repro pipeline that kept another seed has no single run
-        print(f"best3 - single, {column}: mean {known.mean():+.3f} over {len(known)} pipelines with both "
+        print(f"{best} - single, {column}: mean {known.mean():+.3f} over {len(known)} pipelines with both "
               f"(changed in {(np.abs(known) > 1e-9).sum()}; per pipeline {np.round(diff, 3).tolist()})")
 
 
@@ -162,6 +167,7 @@ if __name__ == "__main__":
                     help="score trials by the --validation CSVs even where their records carry their own returns "
                          "(another validation set than train-ppo's)")
     ap.add_argument("--condition", help="read only this condition's trials (a sweep of several conditions)")
+    ap.add_argument("--candidates", type=int, default=CANDIDATES, help="best of this many (ppo.candidates)")
     a = ap.parse_args()
     main(a.sweeps, a.validation, repro=a.repro, repro_episodes=a.episodes, csv_first=a.csv_first,
-         condition=a.condition)
+         condition=a.condition, candidates=a.candidates)
