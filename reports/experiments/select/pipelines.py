@@ -79,6 +79,8 @@ def repro_pipeline(reports: Path, episodes: int) -> tuple[int, list[float], dict
 def main(sweeps: list[Path], validations: list[Path], flat: str = "flat", repro: Path | None = None,
          repro_episodes: int = 10, csv_first: bool = False, condition: str | None = None,
          candidates: int = CANDIDATES) -> None:
+    if candidates < 1:
+        raise SystemExit(f"error: --candidates {candidates}: want 1 or more")
     best = f"best{candidates}"
     csv = (pd.concat([pd.read_csv(v) for v in validations]).groupby("trial")["env_return"].mean()
            if validations else pd.Series(dtype=float))
@@ -118,6 +120,9 @@ def main(sweeps: list[Path], validations: list[Path], flat: str = "flat", repro:
                   "its single run is left out")
         rows.append({"pipeline": p, **{f"return_p+{i * SEED_STRIDE}": round(r, 1) for i, r in enumerate(returns)},
                      "kept": kept["seed"]})
+    if not rows:
+        raise SystemExit(f"error: no pipeline has all {candidates} candidates (seeds p, p+{SEED_STRIDE}, ...) "
+                         f"among the complete trials of {', '.join(map(str, sweeps))}")
     print(pd.DataFrame(rows).to_string(index=False))
     episodes = tables.episodes_frame(chosen_records + single_records)
     outcome = outcomes(episodes)
