@@ -1,0 +1,49 @@
+"""`straddle_train` against `stride60_ahead`, draw by draw: the same PPO seeds and encoder, one with the second
+training terrain `pairs_open.yaml`. For each seed trained under both, the change in extra-blocks success, adaptation
+(lift b before the face minus on open ground, single_block) and suite success (every terrain but flat ground), at
+sweep scale (10 episodes a terrain), with the mean change and its 95% bootstrap interval over seeds.
+
+    .venv/bin/python reports/experiments/straddle/paired.py
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import pandas as pd
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "select"))
+from pipelines import load_records, outcomes
+
+from hexpipe.sweep import stats, tables
+
+BASE = ("ahead_zero", "stride60_ahead", "ahead_third", "best_five")
+COLUMNS = ("extra", "lift", "suite", "flat_cot")
+
+
+def per_draw(sweeps: tuple[str, ...], condition: str) -> pd.DataFrame:
+    records = load_records([Path("reports/sweeps") / s for s in sweeps], condition)
+    if not records:
+        raise SystemExit(f"error: no complete {condition} trials in reports/sweeps/{{{','.join(sweeps)}}}")
+    return outcomes(tables.episodes_frame(records)).drop_duplicates("pipeline").set_index("pipeline")
+
+
+def main() -> None:
+    new, base = per_draw(("straddle_train",), "straddle_train"), per_draw(BASE, "stride60_ahead")
+    seeds = sorted(set(new.index) & set(base.index))
+    both = pd.concat({"straddle_train": new.loc[seeds, list(COLUMNS)],
+                      "stride60_ahead": base.loc[seeds, list(COLUMNS)]}, axis=1)
+    both.index.name = "seed"
+    pd.set_option("display.width", 200)
+    print(both.round(3).to_string())
+    print(f"\nchange per draw, straddle_train - stride60_ahead, over {len(seeds)} seeds (mean [95% bootstrap]):")
+    for column in COLUMNS:
+        diff = (new.loc[seeds, column] - base.loc[seeds, column]).to_numpy(float)
+        est = stats.bootstrap_mean([diff])
+        print(f"  {column:<9} {est.value:+.3f} [{est.low:+.3f}, {est.high:+.3f}]   "
+              f"means {new.loc[seeds, column].mean():.3f} vs {base.loc[seeds, column].mean():.3f}")
+
+
+if __name__ == "__main__":
+    main()
