@@ -417,6 +417,9 @@ class PpoConfig(_Section):
     # a policy lifts, and the task's return ranks the draws that lift higher). 1: one run, still validated
     candidates: PositiveInt = 3
     validation_episodes: Annotated[int, Field(ge=0)] = 60  # 0: no validation (then candidates must be 1)
+    # the terrains the validation episodes take in turn (null: train_terrains): a set that holds what the training
+    # mix has little of, such as two blocks a body length apart, ranks the draws on it (issue 10, `straddle`)
+    validation_terrains: tuple[str, ...] | None = None
     # how the candidate is kept: "return", the highest validation return; "success", success first: the highest
     # return among the candidates whose validation success is within selection_tolerance of the best one's
     selection: Literal["return", "success"] = "return"
@@ -439,6 +442,8 @@ class PpoConfig(_Section):
             raise ValueError("rise_readout reads the terrain encoder, which a blind policy (blind: true) has not")
         if self.lift_cost_ramp is not None and not self.lift_cost_ramp[0] < self.lift_cost_ramp[1]:
             raise ValueError(f"lift_cost_ramp: expected [start, end] with start < end, got {list(self.lift_cost_ramp)}")
+        if self.validation_terrains is not None and not self.validation_terrains:
+            raise ValueError("validation_terrains is empty: name at least one terrain, or null for train_terrains")
         if self.candidates > 1 and self.validation_episodes == 0:
             raise ValueError(f"candidates={self.candidates} needs validation_episodes > 0 to choose among them")
         if self.use_sde and self.privileged_critic:

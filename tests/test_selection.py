@@ -17,6 +17,7 @@ from hexpipe.rl.selection import (
     train_policy,
     validation_episodes,
 )
+from hexpipe.sim.terrain import TerrainError
 
 ROOT = Path(__file__).resolve().parents[1]
 TINY = ["ppo.total_timesteps=128", "ppo.n_envs=1", "ppo.n_steps=64", "ppo.batch_size=64", "ppo.n_epochs=1",
@@ -144,3 +145,39 @@ def test_success_first_keeps_the_candidate_that_crosses_more_though_its_return_i
     assert kept == {"return": 3, "success": 1003}
     with pytest.raises(ConfigError, match="selection"):
         load_params(ROOT / "params.yaml", ["ppo.selection=best"])
+
+
+def test_validation_terrains_rescore_the_trained_policy_and_an_edited_terrain_file_is_scored_anew(
+        tmp_path, monkeypatch):
+    train_policy(tiny(tmp_path), show_progress=False)  # validated on its training terrain, single_block
+    weights = (tmp_path / "ppo" / "policy" / "weights.pt").read_bytes()
+    course = tmp_path / "course.yaml"
+    course.write_text("boxes:\n  - {face: 0.8, depth: 0.3, height: 0.1}\n")
+    params = tiny(tmp_path, f"ppo.validation_terrains=[flat, {course}]")
+    assert validation_episodes(params) == [("flat", 5000), (str(course), 5001), ("flat", 5002)]
+
+    monkeypatch.setattr(selection, "_validation_episode", no_episode)
+    with pytest.raises(AssertionError, match="ran again"):  # other terrains: the saved scores are not reused
+        train_policy(params, resume=True, show_progress=False)
+    monkeypatch.undo()
+    again = train_policy(params, resume=True, show_progress=False)
+    assert again["finished"]  # a selection-only key: the policy is not retrained
+    assert (tmp_path / "ppo" / "policy" / "weights.pt").read_bytes() == weights
+    record = json.loads((tmp_path / "reports" / SELECTION).read_text())
+    assert record["validation"]["terrains"] == ["flat", str(course)]
+    rows = json.loads((tmp_path / "ppo" / VALIDATION).read_text())["rows"]
+    assert [r["terrain"] for r in rows] == ["flat", str(course), "flat"]
+
+    monkeypatch.setattr(selection, "_validation_episode", no_episode)
+    train_policy(params, resume=True, show_progress=False)  # the same terrains: read back, no episode runs
+    course.write_text("boxes:\n  - {face: 0.8, depth: 0.3, height: 0.05}\n")
+    with pytest.raises(AssertionError, match="ran again"):  # the same path, another course
+        train_policy(params, resume=True, show_progress=False)
+
+
+def test_bad_validation_terrains_are_named_before_any_training(tmp_path):
+    with pytest.raises(ConfigError, match="validation_terrains is empty"):
+        tiny(tmp_path, "ppo.validation_terrains=[]")
+    with pytest.raises(TerrainError, match=r"ppo\.validation_terrains: unknown terrain 'nowhere_land'"):
+        train_policy(tiny(tmp_path, "ppo.validation_terrains=[nowhere_land]"), show_progress=False)
+    assert not (tmp_path / "ppo").exists()

@@ -5,8 +5,9 @@ did, on one encoder). The task's own reward charges lifting on open ground, so o
 on it ranks the draws that lift higher (reports/experiments/README.md, select30: Spearman's rho +0.68; the best of 3
 lifts +0.19 rad against +0.11 for a single draw). With ppo.candidates = K, train-ppo trains seeds ppo.seed,
 ppo.seed + SEED_STRIDE, ... each into its own folder, scores each on ppo.validation_episodes deterministic episodes
-of the training terrains, and exports the best. K = 1 trains exactly what it always did, and scores it too, so
-every run reports its validation return (`dvc metrics diff` compares it across runs).
+of ppo.validation_terrains (the training terrains unless set), and exports the best. K = 1 trains exactly what it
+always did, and scores it too, so every run reports its validation return (`dvc metrics diff` compares it across
+runs).
 
 Validation episodes are seeded VALIDATION_SEED, VALIDATION_SEED + 1, ...: evaluate uses eval.seed (1000) onwards,
 training draws its own, so the choice is never made on the episodes the policy is then evaluated on.
@@ -88,9 +89,14 @@ def _validation_episode(args: tuple[Params, str, str, int, int]) -> dict[str, An
             "distance": float(row["distance"]), "b_mean": float(row["b_mean"])}
 
 
+def validation_terrains(params: Params) -> tuple[str, ...]:
+    """The terrains validation episodes are drawn from: ppo.validation_terrains, or else ppo.train_terrains."""
+    return params.ppo.validation_terrains or params.ppo.train_terrains
+
+
 def validation_episodes(params: Params) -> list[tuple[str, int]]:
-    """(terrain, seed) of every validation episode: ppo.train_terrains in turn, seeds VALIDATION_SEED onwards."""
-    terrains = params.ppo.train_terrains
+    """(terrain, seed) of every validation episode: the validation terrains in turn, seeds VALIDATION_SEED onwards."""
+    terrains = validation_terrains(params)
     return [(terrains[i % len(terrains)], VALIDATION_SEED + i) for i in range(params.ppo.validation_episodes)]
 
 
@@ -99,11 +105,15 @@ def validate(params: Params, policy_dir: Path, signature: str, workers: int) -> 
     beside it (VALIDATION) and reused while its training signature, its exported weights (a run retrained on another
     CPU has the same signature, other weights) and the episodes are the same."""
     from hexpipe.rl.inference import WEIGHTS
+    from hexpipe.sim.terrain import load_terrain
     from hexpipe.workers import stop_pool, worker_pool
 
     episodes = validation_episodes(params)
     weights = hashlib.sha256((policy_dir / "policy" / WEIGHTS).read_bytes()).hexdigest()[:16]
-    key = {"signature": signature, "weights": weights, "episodes": [list(e) for e in episodes]}
+    # a terrain file is named by its path: its recipe goes in the key, so that an edited file is scored anew
+    recipes = {t: hashlib.sha256(load_terrain(t).model_dump_json().encode()).hexdigest()[:16]
+               for t in dict.fromkeys(t for t, _ in episodes)}
+    key = {"signature": signature, "weights": weights, "episodes": [list(e) for e in episodes], "terrains": recipes}
     cached = _read_json(policy_dir / VALIDATION)
     if cached is not None and cached.get("key") == key:
         return cached["scores"]
@@ -141,11 +151,15 @@ def train_policy(params: Params, resume: bool = False, show_progress: bool = Tru
     Returns the chosen run's metrics (train_ppo's) plus `selection/chosen_seed` and `selection/validation_return`;
     `finished` is true when no candidate took a step now."""
     from hexpipe.rl.train import POLICY_CONFIG, train_ppo
-    from hexpipe.sim.terrain import load_terrain
+    from hexpipe.sim.terrain import TerrainError, load_terrain
 
     cfg = params.ppo
-    for terrain in dict.fromkeys(cfg.train_terrains):  # a bad name or file: one TerrainError now, not one per worker
-        load_terrain(terrain)
+    for key, terrains in (("train_terrains", cfg.train_terrains), ("validation_terrains", validation_terrains(params))):
+        for terrain in dict.fromkeys(terrains):  # a bad name or file: one TerrainError now, not one per worker
+            try:
+                load_terrain(terrain)
+            except TerrainError as exc:
+                raise TerrainError(f"ppo.{key}: {exc}") from None
     seeds = candidate_seeds(cfg.seed, cfg.candidates)
     _prune(cfg, seeds)
     runs: list[dict[str, Any]] = []
@@ -171,7 +185,7 @@ def train_policy(params: Params, resume: bool = False, show_progress: bool = Tru
     write_json(Path(cfg.report_dir) / SELECTION, {
         "chosen_seed": chosen["seed"],
         "candidates": {str(r["seed"]): r["scores"] for r in runs if r["scores"] is not None},
-        "validation": {"terrains": list(cfg.train_terrains), "first_seed": VALIDATION_SEED,
+        "validation": {"terrains": list(validation_terrains(params)), "first_seed": VALIDATION_SEED,
                        "episodes": cfg.validation_episodes},
     })
     metrics = {**chosen["metrics"], "finished": all(r["metrics"].get("finished") for r in runs),

@@ -40,7 +40,8 @@ from hexpipe.workers import die_with_parent
 
 POLICY_CONFIG = "policy.json"
 PPO_SPEED = ("time",)  # dvclive's time/* metrics: steps per second, measured, not results
-SELECTION_ONLY = ("candidates", "validation_episodes")  # ppo keys that choose among runs but change none of them
+# ppo keys that choose among runs but change none of them
+SELECTION_ONLY = ("candidates", "validation_episodes", "validation_terrains")
 
 
 def env_factory(params: Params, terrain: str, encoder: Encoder | None, randomize: bool) -> Callable[[], gym.Env]:
