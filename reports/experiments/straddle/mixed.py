@@ -1,4 +1,4 @@
-"""The `mixed` validation set of `straddle`: what train-ppo would score with validation episodes drawn from
+"""The `mixed` validation set of `straddle_select`: what train-ppo would score with validation episodes drawn from
 [varied_open, two_blocks] in turn (episode i on terrain i % 2, seed 5000 + i), read from episodes already run.
 
     .venv/bin/python reports/experiments/straddle/mixed.py TWO_BLOCKS.csv OUT.csv
