@@ -1,13 +1,16 @@
-"""`straddle_train` against `stride60_ahead`, draw by draw: the same PPO seeds and encoder, one with the second
-training terrain `pairs_open.yaml`. For each seed trained under both, the change in extra-blocks success, adaptation
-(lift b before the face minus on open ground, single_block) and suite success (every terrain but flat ground), at
-sweep scale (10 episodes a terrain), with the mean change and its 95% bootstrap interval over seeds.
+"""A sweep's condition against `stride60_ahead`, draw by draw: the same PPO seeds and encoder, one recipe changed
+(by default `straddle_train`, with the second training terrain `pairs_open.yaml`; `--sweep long_ahead --condition
+stride60_ahead` for the same recipe at 240k steps). For each seed trained under both, the change in extra-blocks
+success, adaptation (lift b before the face minus on open ground, single_block), suite success (every terrain but
+flat ground) and flat cost of transport, at sweep scale (10 episodes a terrain), with the mean change and its 95%
+bootstrap interval over seeds.
 
-    .venv/bin/python reports/experiments/straddle/paired.py
+    .venv/bin/python reports/experiments/straddle/paired.py [--sweep NAME --condition CONDITION]
 """
 
 from __future__ import annotations
 
+import argparse
 import sys
 from pathlib import Path
 
@@ -29,15 +32,16 @@ def per_draw(sweeps: tuple[str, ...], condition: str) -> pd.DataFrame:
     return outcomes(tables.episodes_frame(records)).drop_duplicates("pipeline").set_index("pipeline")
 
 
-def main() -> None:
-    new, base = per_draw(("straddle_train",), "straddle_train"), per_draw(BASE, "stride60_ahead")
+def main(sweep: str, condition: str) -> None:
+    new, base = per_draw((sweep,), condition), per_draw(BASE, "stride60_ahead")
     seeds = sorted(set(new.index) & set(base.index))
-    both = pd.concat({"straddle_train": new.loc[seeds, list(COLUMNS)],
+    label = sweep if sweep == condition else f"{sweep}:{condition}"
+    both = pd.concat({label: new.loc[seeds, list(COLUMNS)],
                       "stride60_ahead": base.loc[seeds, list(COLUMNS)]}, axis=1)
     both.index.name = "seed"
     pd.set_option("display.width", 200)
     print(both.round(3).to_string())
-    print(f"\nchange per draw, straddle_train - stride60_ahead, over {len(seeds)} seeds (mean [95% bootstrap]):")
+    print(f"\nchange per draw, {label} - stride60_ahead, over {len(seeds)} seeds (mean [95% bootstrap]):")
     for column in COLUMNS:
         diff = (new.loc[seeds, column] - base.loc[seeds, column]).to_numpy(float)
         est = stats.bootstrap_mean([diff])
@@ -46,4 +50,8 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--sweep", default="straddle_train", help="the sweep under reports/sweeps to read")
+    ap.add_argument("--condition", default="straddle_train", help="its condition")
+    a = ap.parse_args()
+    main(a.sweep, a.condition)
