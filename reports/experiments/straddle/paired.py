@@ -1,11 +1,12 @@
 """A sweep's condition against `stride60_ahead`, draw by draw: the same PPO seeds and encoder, one recipe changed
 (by default `straddle_train`, with the second training terrain `pairs_open.yaml`; `--sweep long_ahead --condition
-stride60_ahead` for the same recipe at 240k steps). For each seed trained under both, the change in extra-blocks
+stride60_ahead` for the same recipe at 240k steps; `--base SWEEP:CONDITION` for another baseline, as on a CPU kind
+whose draws differ). For each seed trained under both, the change in extra-blocks
 success, adaptation (lift b before the face minus on open ground, single_block), suite success (every terrain but
 flat ground) and flat cost of transport, at sweep scale (10 episodes a terrain), with the mean change and its 95%
 bootstrap interval over seeds.
 
-    .venv/bin/python reports/experiments/straddle/paired.py [--sweep NAME --condition CONDITION]
+    .venv/bin/python reports/experiments/straddle/paired.py [--sweep NAME --condition CONDITION] [--base S:C]
 """
 
 from __future__ import annotations
@@ -32,16 +33,23 @@ def per_draw(sweeps: tuple[str, ...], condition: str) -> pd.DataFrame:
     return outcomes(tables.episodes_frame(records)).drop_duplicates("pipeline").set_index("pipeline")
 
 
-def main(sweep: str, condition: str) -> None:
-    new, base = per_draw((sweep,), condition), per_draw(BASE, "stride60_ahead")
+def main(sweep: str, condition: str, base_spec: str | None) -> None:
+    if base_spec is None:
+        base_sweeps, base_condition, base_label = BASE, "stride60_ahead", "stride60_ahead"
+    else:
+        base_sweep, sep, base_condition = base_spec.partition(":")
+        if not sep or not base_sweep or not base_condition:
+            raise SystemExit(f"error: --base {base_spec!r} is not SWEEP:CONDITION")
+        base_sweeps, base_label = (base_sweep,), base_spec
+    new, base = per_draw((sweep,), condition), per_draw(base_sweeps, base_condition)
     seeds = sorted(set(new.index) & set(base.index))
     label = sweep if sweep == condition else f"{sweep}:{condition}"
     both = pd.concat({label: new.loc[seeds, list(COLUMNS)],
-                      "stride60_ahead": base.loc[seeds, list(COLUMNS)]}, axis=1)
+                      base_label: base.loc[seeds, list(COLUMNS)]}, axis=1)
     both.index.name = "seed"
     pd.set_option("display.width", 200)
     print(both.round(3).to_string())
-    print(f"\nchange per draw, {label} - stride60_ahead, over {len(seeds)} seeds (mean [95% bootstrap]):")
+    print(f"\nchange per draw, {label} - {base_label}, over {len(seeds)} seeds (mean [95% bootstrap]):")
     for column in COLUMNS:
         diff = (new.loc[seeds, column] - base.loc[seeds, column]).to_numpy(float)
         est = stats.bootstrap_mean([diff])
@@ -53,5 +61,6 @@ if __name__ == "__main__":
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--sweep", default="straddle_train", help="the sweep under reports/sweeps to read")
     ap.add_argument("--condition", default="straddle_train", help="its condition")
+    ap.add_argument("--base", default=None, help="SWEEP:CONDITION to pair with (default: stride60_ahead's sweeps)")
     a = ap.parse_args()
-    main(a.sweep, a.condition)
+    main(a.sweep, a.condition, a.base)
