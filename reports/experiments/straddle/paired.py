@@ -1,13 +1,14 @@
 """A sweep's condition against `stride60_ahead`, draw by draw: the same PPO seeds and encoder, one recipe changed
 (by default `straddle_train`, with the second training terrain `pairs_open.yaml`; `--sweep long_ahead --condition
 stride60_ahead` for the same recipe at 240k steps; `--base SWEEP:CONDITION` for another baseline, as on a CPU kind
-whose draws differ, with SWEEP a comma-separated list where the baseline's seeds span sweeps). For each seed trained
+whose draws differ, with SWEEP a comma-separated list where the baseline's seeds span sweeps; `--sweep` takes such
+a list too). For each seed trained
 under both, the change in extra-blocks success, adaptation (lift b before the face minus on open ground,
 single_block), suite success (every terrain but flat ground) and flat cost of transport, at sweep scale (10 episodes
 a terrain), with the mean change and its 95% bootstrap interval over seeds. `--flat-time` adds flat ground's time
 to goal (s, successes) and the policy's mean omega there (rad/s).
 
-    .venv/bin/python reports/experiments/straddle/paired.py [--sweep NAME --condition CONDITION] [--base S[,S]:C] \
+    .venv/bin/python reports/experiments/straddle/paired.py [--sweep S[,S] --condition CONDITION] [--base S[,S]:C] \
         [--flat-time]
 """
 
@@ -48,7 +49,7 @@ def main(sweep: str, condition: str, base_spec: str | None, flat_time: bool = Fa
         if not sep or not base_sweep or not base_condition:
             raise SystemExit(f"error: --base {base_spec!r} is not SWEEP:CONDITION")
         base_sweeps, base_label = tuple(base_sweep.split(",")), base_spec
-    new, base = per_draw((sweep,), condition), per_draw(base_sweeps, base_condition)
+    new, base = per_draw(tuple(sweep.split(",")), condition), per_draw(base_sweeps, base_condition)
     seeds = sorted(set(new.index) & set(base.index))
     columns = COLUMNS + FLAT_COLUMNS if flat_time else COLUMNS
     label = sweep if sweep == condition else f"{sweep}:{condition}"
@@ -67,7 +68,8 @@ def main(sweep: str, condition: str, base_spec: str | None, flat_time: bool = Fa
 
 if __name__ == "__main__":
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--sweep", default="straddle_train", help="the sweep under reports/sweeps to read")
+    ap.add_argument("--sweep", default="straddle_train",
+                    help="the sweep under reports/sweeps to read (SWEEP[,SWEEP...] where the seeds span sweeps)")
     ap.add_argument("--condition", default="straddle_train", help="its condition")
     ap.add_argument("--base", default=None,
                     help="SWEEP[,SWEEP...]:CONDITION to pair with (default: stride60_ahead's sweeps)")
