@@ -1,7 +1,7 @@
 """Where the wide block stops a policy: does a hind foot stay planted against the face while the CPG cycles?
 
     .venv/bin/python reports/experiments/ahead150/pinned_feet.py [POLICY_DIR[=LABEL] ...] [--gait A,B,OMEGA ...]
-        [--terrain wide_block] [--episodes 0,1,...] [--face 1.0] [--band 0.06] [--set k=v ...]
+        [--terrain wide_block ...] [--episodes 0,1,...] [--face 1.0] [--band 0.06] [--set k=v ...]
 
 For each policy or fixed gait (--gait, held for the episode, as the verdict's grid holds it) and evaluate episode
 (seed eval.seed + index, so the outcome matches the sweep's results.csv), it tracks the two hind feet (leg5 left,
@@ -40,7 +40,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("policies", nargs="*", help="POLICY_DIR or POLICY_DIR=LABEL")
     ap.add_argument("--gait", dest="gaits", action="append", default=[], metavar="A,B,OMEGA", help="a fixed gait")
-    ap.add_argument("--terrain", default="wide_block")
+    ap.add_argument("--terrain", dest="terrains", action="append", help="repeatable (default wide_block)")
     ap.add_argument("--episodes", default="0,1,2,3,4,5,6,7,8,9", help="comma-separated evaluate episode indices")
     ap.add_argument("--face", type=float, default=1.0, help="x of the block's near face from the start (m)")
     ap.add_argument("--band", type=float, default=0.06, help="how far short of the face a foot counts (m)")
@@ -52,7 +52,8 @@ def main() -> None:
     except ValueError:
         raise SystemExit(f"error: --episodes {a.episodes!r} is not a comma-separated list of integers") from None
     specs = [p.partition("=")[::2] for p in a.policies]
-    checked_inputs(a.overrides, [a.terrain], [path for path, _ in specs])
+    terrains = a.terrains or ["wide_block"]
+    checked_inputs(a.overrides, terrains, [path for path, _ in specs])
     controllers = [(label or Path(path).parent.name, ControllerSpec("policy", path)) for path, label in specs]
     for text in a.gaits:
         try:
@@ -64,10 +65,11 @@ def main() -> None:
         controllers.append((f"gait {text}", ControllerSpec("best_fixed", gait=gait)))
     if not controllers:
         raise SystemExit("error: name a policy folder or a --gait")
-    print(f"{'controller':<22} {'ep':>3} {'outcome':<8} {'x_end':>6} " + " ".join(f"{leg}_pinned_s" for leg in HIND))
-    tally: list[tuple[bool, bool]] = []  # (stuck, pinned at least --long) per episode
+    pins = " ".join(f"{leg}_pinned_s" for leg in HIND)
+    print(f"{'controller':<22} {'terrain':<13} {'ep':>3} {'outcome':<8} {'x_end':>6} {pins}")
+    tally: list[tuple[str, bool, bool]] = []  # (terrain, stuck, pinned at least --long) per episode
     for label, spec in controllers:
-        for episode in episodes:
+        for terrain, episode in ((t, e) for t in terrains for e in episodes):
             flags: dict[str, list[bool]] = {leg: [] for leg in HIND}
             dt = [0.0]
 
@@ -78,14 +80,19 @@ def main() -> None:
                     x, z = feet[i][0] - env.start_xy[0], feet[i][2]
                     flags[leg].append(a.face - a.band <= x <= a.face and z < LOW)
 
-            row = evaluate_episode(spec, a.terrain, episode, a.overrides, on_step=record)
+            row = evaluate_episode(spec, terrain, episode, a.overrides, on_step=record)
             pinned = " ".join(f"{longest_run(flags[leg], dt[0]):>12.2f}" for leg in HIND)
-            print(f"{label:<22} {episode:>3} {row['termination']:<8} {row['distance']:>6.2f} "
+            print(f"{label:<22} {terrain:<13} {episode:>3} {row['termination']:<8} {row['distance']:>6.2f} "
                   f"{pinned}", flush=True)
             longest = max(longest_run(flags[leg], dt[0]) for leg in HIND)
-            tally.append((row["termination"] == "stuck", longest >= a.long))
-    stuck = [pin for s, pin in tally if s]
-    arrived = [pin for s, pin in tally if not s]
+            tally.append((terrain, row["termination"] == "stuck", longest >= a.long))
+    for terrain in terrains if len(terrains) > 1 else []:
+        stuck = [pin for t, s, pin in tally if s and t == terrain]
+        arrived = [pin for t, s, pin in tally if not s and t == terrain]
+        print(f"{terrain}: a hind foot pinned >= {a.long:.2f} s in {sum(stuck)} of {len(stuck)} stuck episodes and in "
+              f"{sum(arrived)} of {len(arrived)} others")
+    stuck = [pin for _, s, pin in tally if s]
+    arrived = [pin for _, s, pin in tally if not s]
     print(f"summary over {len(tally)} episodes: a hind foot pinned >= {a.long:.2f} s in {sum(stuck)} of "
           f"{len(stuck)} stuck episodes and in {sum(arrived)} of {len(arrived)} others")
 
