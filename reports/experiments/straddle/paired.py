@@ -6,10 +6,11 @@ a list too). For each seed trained
 under both, the change in extra-blocks success, adaptation (lift b before the face minus on open ground,
 single_block), suite success (every terrain but flat ground) and flat cost of transport, at sweep scale (10 episodes
 a terrain), with the mean change and its 95% bootstrap interval over seeds. `--flat-time` adds flat ground's time
-to goal (s, successes) and the policy's mean omega there (rad/s).
+to goal (s, successes) and the policy's mean omega there (rad/s). `--terrain T` (repeatable) adds each draw's
+success on terrain T.
 
     .venv/bin/python reports/experiments/straddle/paired.py [--sweep S[,S] --condition CONDITION] [--base S[,S]:C] \
-        [--flat-time]
+        [--flat-time] [--terrain T ...]
 """
 
 from __future__ import annotations
@@ -30,7 +31,7 @@ COLUMNS = ("extra", "lift", "suite", "flat_cot")
 FLAT_COLUMNS = ("flat_time", "flat_omega")
 
 
-def per_draw(sweeps: tuple[str, ...], condition: str) -> pd.DataFrame:
+def per_draw(sweeps: tuple[str, ...], condition: str, terrains: tuple[str, ...] = ()) -> pd.DataFrame:
     records = load_records([Path("reports/sweeps") / s for s in sweeps], condition)
     if not records:
         raise SystemExit(f"error: no complete {condition} trials in reports/sweeps/{{{','.join(sweeps)}}}")
@@ -38,10 +39,17 @@ def per_draw(sweeps: tuple[str, ...], condition: str) -> pd.DataFrame:
     draws = outcomes(episodes).drop_duplicates("pipeline").set_index("pipeline")
     flat = episodes[(episodes["controller"] == tables.LEARNED) & (episodes["terrain"] == "flat") & episodes["success"]]
     by_seed = flat.groupby("train_seed")
-    return draws.assign(flat_time=by_seed["time"].mean(), flat_omega=by_seed["omega_mean"].mean())
+    policy = episodes[episodes["controller"] == tables.LEARNED]
+    known = set(policy["terrain"])
+    for terrain in terrains:
+        if terrain not in known:
+            raise SystemExit(f"error: --terrain {terrain!r}: no {condition} episodes on it (terrains: {sorted(known)})")
+    success = {t: policy[policy["terrain"] == t].groupby("train_seed")["success"].mean() for t in terrains}
+    return draws.assign(flat_time=by_seed["time"].mean(), flat_omega=by_seed["omega_mean"].mean(), **success)
 
 
-def main(sweep: str, condition: str, base_spec: str | None, flat_time: bool = False) -> None:
+def main(sweep: str, condition: str, base_spec: str | None, flat_time: bool = False,
+         terrains: tuple[str, ...] = ()) -> None:
     if base_spec is None:
         base_sweeps, base_condition, base_label = BASE, "stride60_ahead", "stride60_ahead"
     else:
@@ -49,9 +57,10 @@ def main(sweep: str, condition: str, base_spec: str | None, flat_time: bool = Fa
         if not sep or not base_sweep or not base_condition:
             raise SystemExit(f"error: --base {base_spec!r} is not SWEEP:CONDITION")
         base_sweeps, base_label = tuple(base_sweep.split(",")), base_spec
-    new, base = per_draw(tuple(sweep.split(",")), condition), per_draw(base_sweeps, base_condition)
+    new = per_draw(tuple(sweep.split(",")), condition, terrains)
+    base = per_draw(base_sweeps, base_condition, terrains)
     seeds = sorted(set(new.index) & set(base.index))
-    columns = COLUMNS + FLAT_COLUMNS if flat_time else COLUMNS
+    columns = (COLUMNS + FLAT_COLUMNS if flat_time else COLUMNS) + terrains
     label = sweep if sweep == condition else f"{sweep}:{condition}"
     both = pd.concat({label: new.loc[seeds, list(columns)],
                       base_label: base.loc[seeds, list(columns)]}, axis=1)
@@ -59,10 +68,11 @@ def main(sweep: str, condition: str, base_spec: str | None, flat_time: bool = Fa
     pd.set_option("display.width", 200)
     print(both.round(3).to_string())
     print(f"\nchange per draw, {label} - {base_label}, over {len(seeds)} seeds (mean [95% bootstrap]):")
+    width = max([9, *map(len, terrains)])
     for column in columns:
         diff = (new.loc[seeds, column] - base.loc[seeds, column]).to_numpy(float)
         est = stats.bootstrap_mean([diff])
-        print(f"  {column:<9} {est.value:+.3f} [{est.low:+.3f}, {est.high:+.3f}]   "
+        print(f"  {column:<{width}} {est.value:+.3f} [{est.low:+.3f}, {est.high:+.3f}]   "
               f"means {new.loc[seeds, column].mean():.3f} vs {base.loc[seeds, column].mean():.3f}")
 
 
@@ -74,5 +84,6 @@ if __name__ == "__main__":
     ap.add_argument("--base", default=None,
                     help="SWEEP[,SWEEP...]:CONDITION to pair with (default: stride60_ahead's sweeps)")
     ap.add_argument("--flat-time", action="store_true", help="also flat ground's time to goal and omega")
+    ap.add_argument("--terrain", action="append", default=[], help="also each draw's success on this terrain")
     a = ap.parse_args()
-    main(a.sweep, a.condition, a.base, a.flat_time)
+    main(a.sweep, a.condition, a.base, a.flat_time, tuple(a.terrain))
