@@ -37,13 +37,12 @@ def per_draw(sweeps: tuple[str, ...], condition: str, terrains: tuple[str, ...] 
         raise SystemExit(f"error: no complete {condition} trials in reports/sweeps/{{{','.join(sweeps)}}}")
     episodes = tables.episodes_frame(records)
     draws = outcomes(episodes).drop_duplicates("pipeline").set_index("pipeline")
-    flat = episodes[(episodes["controller"] == tables.LEARNED) & (episodes["terrain"] == "flat") & episodes["success"]]
-    by_seed = flat.groupby("train_seed")
     policy = episodes[episodes["controller"] == tables.LEARNED]
-    known = set(policy["terrain"])
-    for terrain in terrains:
-        if terrain not in known:
-            raise SystemExit(f"error: --terrain {terrain!r}: no {condition} episodes on it (terrains: {sorted(known)})")
+    by_seed = policy[(policy["terrain"] == "flat") & policy["success"]].groupby("train_seed")
+    unknown = sorted(set(terrains) - set(policy["terrain"]))
+    if unknown:
+        raise SystemExit(f"error: --terrain {unknown[0]!r}: no {condition} episodes on it "
+                         f"(terrains: {sorted(set(policy['terrain']))})")
     success = {t: policy[policy["terrain"] == t].groupby("train_seed")["success"].mean() for t in terrains}
     return draws.assign(flat_time=by_seed["time"].mean(), flat_omega=by_seed["omega_mean"].mean(), **success)
 
