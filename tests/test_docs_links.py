@@ -7,6 +7,7 @@ moved section would otherwise leave links that open the top of a page (or nothin
 from __future__ import annotations
 
 import re
+from collections.abc import Iterator
 from pathlib import Path
 from urllib.parse import unquote
 
@@ -28,16 +29,22 @@ def slug(heading: str) -> str:
     return text.replace(" ", "-")
 
 
+def prose(path: Path) -> Iterator[tuple[int, str]]:
+    """(line number, line) of a Markdown file's lines outside code fences."""
+    fenced = False
+    for number, line in enumerate(path.read_text().splitlines(), 1):
+        if FENCE.match(line):
+            fenced = not fenced
+        elif not fenced:
+            yield number, line
+
+
 def anchors(path: Path) -> set[str]:
     """Every heading anchor of a Markdown file, with GitHub's -1, -2 ... suffixes for repeated headings."""
     seen: dict[str, int] = {}
     out: set[str] = set()
-    fenced = False
-    for line in path.read_text().splitlines():
-        if FENCE.match(line):
-            fenced = not fenced
-            continue
-        match = None if fenced else HEADING.match(line)
+    for _, line in prose(path):
+        match = HEADING.match(line)
         if match:
             base = slug(match.group(1))
             n = seen.get(base, 0)
@@ -49,13 +56,7 @@ def anchors(path: Path) -> set[str]:
 def links(path: Path) -> list[tuple[int, str]]:
     """(line number, target) of each relative link outside code fences and inline code."""
     out = []
-    fenced = False
-    for number, line in enumerate(path.read_text().splitlines(), 1):
-        if FENCE.match(line):
-            fenced = not fenced
-            continue
-        if fenced:
-            continue
+    for number, line in prose(path):
         for target in LINK.findall(re.sub(r"`[^`]*`", "``", line)):
             if not re.match(r"[a-z][a-z0-9+.-]*:", target):  # http:, https:, mailto: ... are not checked
                 out.append((number, target))
