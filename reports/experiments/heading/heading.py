@@ -15,7 +15,6 @@ how many episodes turned more than 0.5 rad off the course; then successes per te
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
@@ -89,8 +88,6 @@ def main() -> None:
     print("\nfailures: controller, gain, terrain, episode, distance (m), final yaw (rad)")
     for r in fails.itertuples():
         print(f"  {r.controller} {r.gain:g} {r.terrain} {r.episode} {r.distance:.2f} {r.final_yaw:+.2f}")
-    if math.isnan(frame.max_abs_yaw.max()):
-        raise SystemExit("error: no step was recorded")
 
 
 if __name__ == "__main__":
