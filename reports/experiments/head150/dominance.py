@@ -91,6 +91,9 @@ def main() -> None:
         fixed = pd.read_csv(a.fixed)
     except (OSError, ValueError) as exc:
         raise SystemExit(f"error: {a.fixed}: {exc}") from None
+    missing = {"controller", "gain", "terrain", "success", "time", "cost_of_transport"} - set(fixed.columns)
+    if missing:
+        raise SystemExit(f"error: {a.fixed} lacks the columns {sorted(missing)} (heading.py's --csv has them)")
     counts = {}
     for arm in a.arms:
         condition, _, gain = arm.partition(":")
