@@ -17,12 +17,15 @@ second minus the first over the seeds both have.
 from __future__ import annotations
 
 import argparse
-import json
 import math
+import sys
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "select"))
+from pipelines import load_records  # select/pipelines.py: a sweep's complete trial records
 
 from hexpipe.sweep import stats
 
@@ -54,11 +57,8 @@ def dominated_by(policy: pd.Series, gaits: pd.DataFrame) -> list[str]:
 
 
 def policy_episodes(report: Path, condition: str) -> pd.DataFrame:
-    rows = []
-    for path in sorted(report.glob("*/result.json")):
-        result = json.loads(path.read_text())
-        if result.get("condition") == condition and result.get("status") == "ok":
-            rows += [{**ep, "seed": result["seed"]} for ep in result["episodes"] if ep["controller"] == "policy"]
+    rows = [{**ep, "seed": record["seed"]} for record in load_records([report], condition)
+            for ep in record["episodes"] if ep["controller"] == "policy"]
     if not rows:
         raise SystemExit(f"error: no complete {condition} trials in {report}")
     return pd.DataFrame(rows)

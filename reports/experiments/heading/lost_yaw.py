@@ -14,12 +14,14 @@ the suite and is skipped.
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "ceiling"))
 from episodes import evaluate_episode  # the helper in ceiling/
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "select"))
+from pipelines import load_records  # select/pipelines.py: a sweep's complete trial records
 
 from hexpipe.evaluation.controllers import ControllerSpec
 from hexpipe.sensors.heightmap import quat_to_yaw
@@ -27,16 +29,10 @@ from hexpipe.sensors.heightmap import quat_to_yaw
 TURNED = 1.0  # rad at the end of the episode: a base this far off the course walks more sideways than forwards
 
 
-def lost_episodes(report: Path, condition: str) -> list[tuple[dict, dict]]:
-    """(trial's result.json, lost suite episode) for every complete trial of `condition` under `report`."""
-    out = []
-    for path in sorted(report.glob("*/result.json")):
-        result = json.loads(path.read_text())
-        if result.get("condition") != condition or result.get("status") != "ok":
-            continue
-        out += [(result, ep) for ep in result["episodes"]
-                if ep["controller"] == "policy" and ep["terrain"] != "flat" and not ep["success"]]
-    return out
+def lost_episodes(records: list[dict]) -> list[tuple[dict, dict]]:
+    """(trial record, lost suite episode) for every lost policy episode off flat ground."""
+    return [(record, ep) for record in records for ep in record["episodes"]
+            if ep["controller"] == "policy" and ep["terrain"] != "flat" and not ep["success"]]
 
 
 def main() -> None:
@@ -48,10 +44,9 @@ def main() -> None:
     if not a.report.is_dir():
         raise SystemExit(f"error: {a.report} is not a folder")
     data = a.data or Path("data/sweeps") / a.report.name
-    lost = lost_episodes(a.report, a.condition)
-    results = [json.loads(p.read_text()) for p in a.report.glob("*/result.json")]
-    trials = sum(r.get("condition") == a.condition and r.get("status") == "ok" for r in results)
-    print(f"{len(lost)} lost suite episodes of {a.condition} over {trials} complete trials in {a.report}")
+    records = load_records([a.report], a.condition)
+    lost = lost_episodes(records)
+    print(f"{len(lost)} lost suite episodes of {a.condition} over {len(records)} complete trials in {a.report}")
     print(f"{'trial':<22} {'terrain':<13} ep  distance  end x   end y  end yaw  max|yaw|  stall legs        kind")
     mismatch = 0
     for result, ep in lost:
