@@ -37,7 +37,8 @@ def _one(job: tuple[str, tuple[float, float, float] | None, str, int, tuple[str,
 
 
 def _gain_set(overrides: list[str], gain: float) -> tuple[str, ...]:
-    return tuple(o for o in overrides if not o.startswith("sim.elevator_gain=")) + (f"sim.elevator_gain={gain}",)
+    """The overrides with sim.elevator_gain set to `gain` (replacing the trial's own)."""
+    return (*(o for o in overrides if not o.startswith("sim.elevator_gain=")), f"sim.elevator_gain={gain}")
 
 
 def main() -> None:
@@ -62,7 +63,8 @@ def main() -> None:
     mismatch = 0
     with ProcessPoolExecutor(a.workers) as pool:
         for terrain in a.terrains:
-            print(f"\n{terrain}, {a.episodes} episodes a row; successes per elevator gain, then the failures' distances")
+            print(f"\n{terrain}, {a.episodes} episodes a row; successes per elevator gain, "
+                  "then the failures' distances")
             jobs, names, observed = [], [], []
             for record in records:
                 policy = data / record["trial"] / "ppo"
