@@ -20,7 +20,7 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "ceiling"))
-from episodes import evaluate_episode, parse_gait, print_arms  # the helper in ../ceiling
+from episodes import checked_inputs, evaluate_episode, parse_gait, print_arms  # the helper in ../ceiling
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "select"))
 from pipelines import load_records  # select/pipelines.py: a sweep's complete trial records
@@ -58,6 +58,11 @@ def main() -> None:
     records = load_records([a.report], a.condition)
     if not records:
         raise SystemExit(f"error: no complete trial of condition {a.condition!r} in {a.report}")
+    policies = {record["trial"]: data / record["trial"] / "ppo" for record in records}
+    for policy in policies.values():
+        if not policy.is_dir():
+            raise SystemExit(f"error: {policy} is missing (the trial's policy; pass --data)")
+    checked_inputs(records[0]["overrides"], a.terrains, [str(p) for p in policies.values()])
     gaits = [parse_gait(g) for g in a.gaits]
     arms = [f"gain {g:g}" for g in a.gains]
     mismatch = 0
@@ -67,11 +72,8 @@ def main() -> None:
                   "then the failures' distances")
             jobs, names, observed = [], [], []
             for record in records:
-                policy = data / record["trial"] / "ppo"
-                if not policy.is_dir():
-                    raise SystemExit(f"error: {policy} is missing (the trial's policy; pass --data)")
                 names.append(record["trial"])
-                jobs += [(str(policy), None, terrain, i, _gain_set(record["overrides"], g))
+                jobs += [(str(policies[record["trial"]]), None, terrain, i, _gain_set(record["overrides"], g))
                          for g in a.gains for i in range(a.episodes)]
                 trained = dict(o.split("=", 1) for o in record["overrides"]).get("sim.elevator_gain")
                 eps = {ep["episode"]: ep for ep in record["episodes"]
