@@ -16,6 +16,10 @@ kept policy's first --episodes (10) evaluation episodes per terrain from REPORTS
 sweep trials' episodes (the same seeds from eval.seed, deterministic), for the policy, the open-loop gait and the
 best fixed gait (the same a=0.4, b=0.4, omega=pi when the repro's 27-gait grid picks it: the script says which it
 picked). Without selection the pipeline is its first candidate alone, known only where that is the one kept.
+
+--lift-floor X keeps, of a pipeline's candidates, the highest validation return among those whose validation lift
+(mean b before a block face minus mean b on open ground, over their episodes in the --validation CSVs, which
+validate.py writes) is at least X rad; where none is, the highest return as before.
 """
 
 from __future__ import annotations
@@ -78,12 +82,13 @@ def repro_pipeline(reports: Path, episodes: int) -> tuple[int, list[float], dict
 
 def main(sweeps: list[Path], validations: list[Path], flat: str = "flat", repro: Path | None = None,
          repro_episodes: int = 10, csv_first: bool = False, condition: str | None = None,
-         candidates: int = CANDIDATES) -> None:
+         candidates: int = CANDIDATES, lift_floor: float | None = None) -> None:
     if candidates < 1:
         raise SystemExit(f"error: --candidates {candidates}: want 1 or more")
     best = f"best{candidates}"
-    csv = (pd.concat([pd.read_csv(v) for v in validations]).groupby("trial")["env_return"].mean()
-           if validations else pd.Series(dtype=float))
+    frame = pd.concat([pd.read_csv(v) for v in validations]) if validations else pd.DataFrame(columns=["trial"])
+    csv = frame.groupby("trial")["env_return"].mean() if validations else pd.Series(dtype=float)
+    lifts = validation_lifts(frame, lift_floor)
     records = load_records(sweeps, condition)
     if not records:
         raise SystemExit(f"error: no complete trials{f' of condition {condition!r}' if condition else ''} in "
@@ -101,10 +106,13 @@ def main(sweeps: list[Path], validations: list[Path], flat: str = "flat", repro:
         if any(np.isnan(returns)):
             print(f"pipeline {p}: a candidate has no validation return ({[c['data'] for c in cands]}); left out")
             continue
-        kept = cands[choose(returns)]
+        lift = [lifts.get(c["data"], np.nan) for c in cands]
+        kept = cands[choose(returns) if lift_floor is None else choose_with_lift(returns, lift, lift_floor)]
         chosen_records.append({**kept, "condition": best, "seed": p})
         single_records.append({**cands[0], "condition": SINGLE, "seed": p})
         rows.append({"pipeline": p, **{f"return_p+{i * SEED_STRIDE}": round(r, 1) for i, r in enumerate(returns)},
+                     **({f"v_lift_p+{i * SEED_STRIDE}": round(x, 3) for i, x in enumerate(lift)}
+                        if lift_floor is not None else {}),
                      "kept": kept["seed"]})
     if repro is not None:
         p, returns, kept = repro_pipeline(repro, repro_episodes)
@@ -135,6 +143,27 @@ def main(sweeps: list[Path], validations: list[Path], flat: str = "flat", repro:
         known = diff[~np.isnan(diff)]  # a --repro pipeline that kept another seed has no single run
         print(f"{best} - single, {column}: mean {known.mean():+.3f} over {len(known)} pipelines with both "
               f"(changed in {(np.abs(known) > 1e-9).sum()}; per pipeline {np.round(diff, 3).tolist()})")
+
+
+def validation_lifts(frame: pd.DataFrame, lift_floor: float | None) -> pd.Series:
+    """Per trial (data folder), mean b before a face minus mean b on open ground over its validation episodes
+    (rad); empty without --lift-floor. One line, not a traceback, when the CSVs lack the columns or a trial."""
+    if lift_floor is None:
+        return pd.Series(dtype=float)
+    missing = {"b_before_block", "b_open"} - set(frame.columns)
+    if missing:
+        raise SystemExit(f"error: --lift-floor needs --validation CSVs with {sorted(missing)} (validate.py has them)")
+    by_trial = frame.groupby("trial")
+    return by_trial["b_before_block"].mean() - by_trial["b_open"].mean()
+
+
+def choose_with_lift(returns: list[float], lifts: list[float], floor: float) -> int:
+    """The highest return among the candidates whose validation lift is at least `floor` (rad); with none, the
+    highest return (`choose`, the rule train-ppo uses)."""
+    eligible = np.asarray(lifts, dtype=float) >= floor  # a NaN lift (no face seen) is not eligible
+    if not eligible.any():
+        return choose(returns)
+    return int(np.argmax(np.where(eligible, np.asarray(returns, dtype=float), -np.inf)))
 
 
 def print_targets(episodes: pd.DataFrame, conditions: list[str], flat: str, unit: str, width: int) -> None:
@@ -173,6 +202,10 @@ if __name__ == "__main__":
                          "(another validation set than train-ppo's)")
     ap.add_argument("--condition", help="read only this condition's trials (a sweep of several conditions)")
     ap.add_argument("--candidates", type=int, default=CANDIDATES, help="best of this many (ppo.candidates)")
+    ap.add_argument("--lift-floor", type=float, help="keep the best return among candidates lifting at least this "
+                                                      "much (rad) in the --validation CSVs")
     a = ap.parse_args()
+    if a.lift_floor is not None and not a.validation:
+        ap.error("--lift-floor needs --validation CSVs (validate.py's, with b_before_block and b_open)")
     main(a.sweeps, a.validation, repro=a.repro, repro_episodes=a.episodes, csv_first=a.csv_first,
-         condition=a.condition, candidates=a.candidates)
+         condition=a.condition, candidates=a.candidates, lift_floor=a.lift_floor)

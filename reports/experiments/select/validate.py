@@ -7,7 +7,9 @@ Each TRIAL_DIR is a sweep trial's data folder (data/sweeps/NAME/COND-seedN, hold
 same `--episodes` episodes of `--terrain` (default `varied`; a name or a terrain file) at full difficulty, seeds
 5000.. (evaluate uses 1000..; training draws its own), deterministic, with params.yaml as the sweep trials ran it
 (the default conditions: nothing to override).
-Writes one row per episode: trial, seed, success, distance, energy (J), termination, time, and two returns:
+Writes one row per episode: trial, seed, success, distance, energy (J), termination, time, b's mean, b before a
+block face and on open ground (rad; empty where the episode saw none: `pipelines.py --lift-floor` reads them),
+and two returns:
 - `return`: the power-price reward as `select` measured it (reward_scale x control_hz per m, -power_cost x
   control_hz per J, -failure_penalty on a stuck or fallen end), with no lift term;
 - `env_return`: the sum of the env's own rewards, so the whole training reward of params.yaml's task, the lift
@@ -47,7 +49,8 @@ def _one(args: tuple[str, int, tuple[str, ...], str]) -> dict:
            - task.power_cost * params.sim.control_hz * row["energy_j"] - task.failure_penalty * failed)
     return {"trial": trial, "seed": seed, "success": row["success"], "termination": row["termination"],
             "distance": row["distance"], "time": row["time"], "energy_j": row["energy_j"],
-            "b_mean": row["b_mean"], "return": ret, "env_return": sum(rewards)}
+            "b_mean": row["b_mean"], "b_before_block": row["b_before_block"], "b_open": row["b_open"],
+            "return": ret, "env_return": sum(rewards)}
 
 
 def main() -> None:
