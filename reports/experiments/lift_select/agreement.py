@@ -36,7 +36,10 @@ def main() -> None:
     if not records:
         raise SystemExit(f"error: no complete trials in {a.sweep}")
     validation = pd.read_csv(a.validation)
-    v_lift = validation_lifts(validation, lift_floor=0.0)
+    absent = sorted({r["data"] for r in records} - set(validation.get("trial", [])))
+    if absent:
+        raise SystemExit(f"error: {a.validation} has no episodes of {', '.join(absent)}")
+    v_lift = validation_lifts(validation)
     v_parts = validation.groupby("trial")[["b_before_block", "b_open"]].mean()
     episodes = tables.episodes_frame(records)
     suite = tables.adaptation_per_seed(episodes).set_index("train_seed")["adaptation"]

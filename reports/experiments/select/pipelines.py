@@ -87,8 +87,11 @@ def main(sweeps: list[Path], validations: list[Path], flat: str = "flat", repro:
         raise SystemExit(f"error: --candidates {candidates}: want 1 or more")
     best = f"best{candidates}"
     frame = pd.concat([pd.read_csv(v) for v in validations]) if validations else pd.DataFrame(columns=["trial"])
+    if validations and not {"trial", "env_return"} <= set(frame.columns):
+        raise SystemExit(f"error: --validation {', '.join(map(str, validations))}: want validate.py's CSVs "
+                         "(columns trial and env_return)")
     csv = frame.groupby("trial")["env_return"].mean() if validations else pd.Series(dtype=float)
-    lifts = validation_lifts(frame, lift_floor)
+    lifts = validation_lifts(frame) if lift_floor is not None else pd.Series(dtype=float)
     records = load_records(sweeps, condition)
     if not records:
         raise SystemExit(f"error: no complete trials{f' of condition {condition!r}' if condition else ''} in "
@@ -145,11 +148,9 @@ def main(sweeps: list[Path], validations: list[Path], flat: str = "flat", repro:
               f"(changed in {(np.abs(known) > 1e-9).sum()}; per pipeline {np.round(diff, 3).tolist()})")
 
 
-def validation_lifts(frame: pd.DataFrame, lift_floor: float | None) -> pd.Series:
+def validation_lifts(frame: pd.DataFrame) -> pd.Series:
     """Per trial (data folder), mean b before a face minus mean b on open ground over its validation episodes
-    (rad); empty without --lift-floor. One line, not a traceback, when the CSVs lack the columns or a trial."""
-    if lift_floor is None:
-        return pd.Series(dtype=float)
+    (rad). One line, not a traceback, when the CSVs lack those columns; a trial they lack has no lift (NaN)."""
     missing = {"b_before_block", "b_open"} - set(frame.columns)
     if missing:
         raise SystemExit(f"error: --lift-floor needs --validation CSVs with {sorted(missing)} (validate.py has them)")
