@@ -1,8 +1,9 @@
-"""How each controller's suite episodes ended, per sweep: counts of goal / stuck / fall, and every policy `fall`.
+"""How episodes ended, per sweep: each controller's evaluation (goal / stuck / fall), every policy `fall`, and the
+training episodes of all its trials (each trial's ppo/episodes.jsonl, which logs every episode training ended).
 
     .venv/bin/python reports/experiments/tall_fall/terminations.py reports/sweeps/elev_free reports/sweeps/free80 ...
 
-Reads each trial's eval/results.csv (evaluate's rows) under the sweep folders given.
+Reads each trial's eval/results.csv (evaluate's rows) and ppo/episodes.jsonl under the sweep folders given.
 """
 
 from __future__ import annotations
@@ -28,6 +29,10 @@ def main() -> None:
         for r in falls.itertuples():
             print(f"  fall: {r.trial} {r.terrain} episode {r.episode} at {r.distance:.2f} m after {r.time:.2f} s,"
                   f" b mean {r.b_mean:.2f}, a mean {r.a_mean:.2f}")
+        logs = sorted(Path(sweep).glob("*/ppo/episodes.jsonl"))
+        ends = pd.concat([pd.read_json(f, lines=True)["termination"] for f in logs]) if logs else pd.Series()
+        print(f"  training episodes of {len(logs)} trials: {len(ends)}, "
+              + ", ".join(f"{k} {v}" for k, v in ends.value_counts().items()))
 
 
 if __name__ == "__main__":
