@@ -159,6 +159,17 @@ def test_truncates_at_time_limit():
     env.close()
 
 
+@pytest.mark.parametrize(("fall_height", "ends"), [(0.07, "fall"), (0.04, None)])
+def test_fall_height_is_measured_from_the_terrain_under_the_base(fall_height, ends):
+    """The base 0.066 m over the tall block's top (0.12 m), as elev_free's straddling dips were (reports/experiments,
+    tall_fall): a fall at the default 0.07 m, not at the chassis's half-thickness."""
+    env = HexapodEnv("tall_block", task=TaskConfig(fall_height=fall_height))
+    env.reset(seed=0)
+    over_block = np.array([env.start_xy[0] + 1.15, env.start_xy[1], 0.12 + 0.066])
+    assert env._termination(over_block, np.array([0.0, 0.0, 0.0, 1.0])) == ends
+    env.close()
+
+
 def test_flipped_robot_is_a_fall():
     env = HexapodEnv("flat")
     env.reset(seed=0)
