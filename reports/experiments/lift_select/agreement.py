@@ -3,10 +3,11 @@
     .venv/bin/python reports/experiments/lift_select/agreement.py reports/sweeps/fall04 \
         reports/experiments/lift_select/validation.csv --condition free80e04
 
-Per draw: train-ppo's validation return; the validation lift (mean b before a block face minus mean b on open
-ground over its episodes in the validate.py CSV) and the single block's lift in the sweep's evaluation (the
-adaptation target's measure), each with its two parts (v_ and sb_ before and open, rad); and the Spearman rank
-correlation of the two lifts over the draws.
+Per draw: train-ppo's validation return (its selection.json) and the mean return of its episodes in the CSV
+(the same when the CSV holds train-ppo's validation episodes); the validation lift (mean b before a block face
+minus mean b on open ground over its episodes in the CSV) and the single block's lift in the sweep's evaluation
+(the adaptation target's measure), each with its two parts (v_ and sb_ before and open, rad); and the Spearman
+rank correlation of the two lifts over the draws.
 """
 
 from __future__ import annotations
@@ -46,7 +47,9 @@ def main() -> None:
     home = episodes[(episodes["controller"] == tables.LEARNED) & (episodes["terrain"] == tables.HOME_TERRAIN)]
     s_parts = home.groupby("train_seed")[["b_before_block", "b_open"]].mean()
     own = pd.Series(dtype=float)  # no CSV returns: each draw's own, from its selection.json
+    csv_return = validation.groupby("trial")["env_return"].mean()
     rows = pd.DataFrame([{"seed": r["seed"], "validation_return": validation_return(r, own),
+                          "csv_return": csv_return.get(r["data"]),
                           "validation_lift": v_lift.get(r["data"]), "single_block_lift": suite.get(r["seed"]),
                           "v_before": v_parts.loc[r["data"], "b_before_block"],
                           "v_open": v_parts.loc[r["data"], "b_open"],
