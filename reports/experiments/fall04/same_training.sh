@@ -5,6 +5,9 @@
 #   bash reports/experiments/fall04/same_training.sh [reports/sweeps]     # from the main checkout
 set -euo pipefail
 SWEEPS=${1:-reports/sweeps}
+for sweep in fall04 elev_free; do
+  [ -d "$SWEEPS/$sweep" ] || { echo "error: $SWEEPS/$sweep: no such sweep folder (run from the main checkout)" >&2; exit 2; }
+done
 for d in "$SWEEPS"/fall04/free80e04-seed*/; do
   s=${d%/}; s=${s##*seed}; t=$SWEEPS/elev_free/free80e-seed$s
   m=$(cmp -s "$d/ppo/metrics.json" "$t/ppo/metrics.json" && echo same || echo DIFF)

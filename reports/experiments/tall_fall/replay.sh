@@ -9,6 +9,10 @@ PY=$MAIN/.venv/bin/python
 TRAINED=(--set sim.heading_gain=1 --set sim.elevator_gain=2.5 --set task.lift_teacher=60 --set task.stride_reflex=0.35
   --set "task.lift_reflex_zone=[0.6,1.05]" --set "cpg.lower=[0.6,0.2,3.141593]" --set "cpg.initial=[0.6,0.2,3.926991]"
   --set "cpg.upper=[0.8,0.5,4.712389]" --set ppo.encoder_dir=data/encoders/63bc9753625a595a)
+for seed in 2000 2001 2002; do  # the policies are the tall_fall sweep's; say so in one line, not a silent stop
+  [ -d "data/sweeps/tall_fall/free80e-seed$seed/ppo" ] || {
+    echo "error: data/sweeps/tall_fall/free80e-seed$seed/ppo is missing (run the tall_fall sweep in this worktree first)" >&2; exit 2; }
+done
 declare -A ARMS=([trained]="" [gain1.5]="--set sim.elevator_gain=1.5" [fall0.04]="--set task.fall_height=0.04")
 header="# $(date -u +%Y-%m-%dT%H:%M:%SZ), $(lscpu | sed -n 's/^Model name: *//p') family $(lscpu | sed -n 's/^CPU family: *//p') model $(lscpu | sed -n 's/^Model: *//p'), branch head ($(git rev-parse --short HEAD))"
 for ep in 2000:6 2000:8 2001:4 2002:0; do
