@@ -66,6 +66,9 @@ class SimConfig(_Section):
     body_height: PositiveFloat = 0.24  # nominal base height above the stance plane (m)
     stance_reach: PositiveFloat = 0.30  # horizontal distance from hip yaw axis to foot in stance (m)
     lift_gain: PositiveFloat = 1.4  # shoulder lift (rad) per rad of the oscillator's y in swing
+    # the elevator reflex (hexpipe/sim/elevator.py): elbow opening (rad) per rad of y for the rest of a swing in which
+    # the leg's shin or foot touched something; 0 is off
+    elevator_gain: Annotated[float, Field(ge=0.0, le=5.0)] = 0.0
 
     @model_validator(mode="after")
     def _rates_divide(self) -> SimConfig:

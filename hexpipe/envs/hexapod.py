@@ -57,8 +57,10 @@ from hexpipe.envs.rewards import (
     time_penalty,
 )
 from hexpipe.envs.state import WORLD_FRAME, EnvScene, EnvState
+from hexpipe.sensors.contacts import contact_normals
 from hexpipe.sensors.heightmap import HEADING_FRAME, quat_to_yaw, reference_height
 from hexpipe.sim.cpg import CPG
+from hexpipe.sim.elevator import caught_legs, elbow_opening, pressed_from_side
 from hexpipe.sim.gait import GaitMap, slew_path
 from hexpipe.sim.lift_reflex import lift_reflex
 from hexpipe.sim.lift_trail import LiftTrail, foot_lags
@@ -226,6 +228,7 @@ class HexapodEnv(gym.Env):
             self.robot.scale_base_mass(mass_scale)
         self._physics = (friction, mass_scale)
         self._xy = self.cpg.xy
+        self._caught = np.zeros(len(self.robot_spec.legs), dtype=bool)  # legs the elevator reflex opens
         targets = self.gait.joint_targets(self._xy)
         self.robot.reset_joints(targets)
         self._targets = targets
@@ -260,7 +263,9 @@ class HexapodEnv(gym.Env):
             stride = self.stride_reflex.advance(self.control_dt)
             cap = stride if self.task.stride_reflex > 0 else None
         xy = self.cpg.advance(command, self.physics_dt, self.substeps, floor, cap)
-        targets = slew_path(self._targets, self.gait.joint_targets(xy), self._max_joint_step)
+        elevator = self.sim_cfg.elevator_gain
+        opening = elbow_opening(xy[..., 1], self._caught, elevator) if elevator > 0 else None
+        targets = slew_path(self._targets, self.gait.joint_targets(xy, opening), self._max_joint_step)
         self._targets = targets[-1]
         self._xy = xy[-1]  # each leg's (x, y) now, with its lift floor (the recorder logs it)
         power = 0.0
@@ -270,6 +275,9 @@ class HexapodEnv(gym.Env):
             power += self.robot.mechanical_power()
         power /= self.substeps
         self.steps += 1
+        if elevator > 0:  # which legs the next control step opens: read once per step, after the physics
+            pressed = pressed_from_side(contact_normals(c, self.robot.body, self.robot.foot_links))
+            self._caught = caught_legs(self._caught, self._xy[:, 1], pressed)
 
         pos, quat, lin, _ = self.robot.base_state()
         termination = None

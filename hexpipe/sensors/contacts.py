@@ -18,6 +18,7 @@ if TYPE_CHECKING:
 
 LEGS = 6
 MAX_FORCE_N = 1e4  # observation bound; the whole robot weighs about 200 N
+_NORMAL = 7  # index of contactNormalOnB in a getContactPoints tuple
 _NORMAL_FORCE = 9  # index of the normal force in a getContactPoints tuple
 
 
@@ -32,6 +33,19 @@ def read_contacts(client: int, body: int, links: list[int]) -> np.ndarray:
                     p.getContactPoints(bodyA=body, linkIndexA=link, physicsClientId=client))
         out[0, leg] = float(force > 0.0)
         out[1, leg] = force
+    return out
+
+
+def contact_normals(client: int, body: int, links: list[int]) -> list[np.ndarray]:
+    """Per link, a (points, 3) array of the unit normals of its contact points that press (positive normal force),
+    each pointing from what it touches towards the robot (PyBullet's contactNormalOnB with the robot as body A)."""
+    import pybullet as p
+
+    out = []
+    for link in links:
+        points = p.getContactPoints(bodyA=body, linkIndexA=link, physicsClientId=client)
+        out.append(np.array([point[_NORMAL] for point in points if point[_NORMAL_FORCE] > 0.0], dtype=float)
+                   .reshape(-1, 3))
     return out
 
 

@@ -5,7 +5,8 @@ We therefore read x as the *backward* hip angle: in stance the foot sweeps back 
 - hip yaw = sign(sin(mount angle)) * x  (a positive yaw moves a left leg's foot backward, a right leg's forward);
 - stance (y <= 0): shoulder and elbow hold the inverse-kinematics solution that puts the foot on the stance plane
   `body_height` below the base at `stance_reach` from the yaw axis (the stance rule: feet stay on the ground);
-- swing (y > 0): the shoulder lifts by lift_gain * y above that stance angle, the elbow keeps its stance angle;
+- swing (y > 0): the shoulder lifts by lift_gain * y above that stance angle, the elbow keeps its stance angle
+  unless the elevator reflex opens it (`hexpipe.sim.elevator`, a leg caught in its swing);
 - targets then move no faster than the actuators' rated speeds (`slew_limit`).
 """
 
@@ -61,14 +62,15 @@ class GaitMap:
         )
         self.yaw_sign = np.array([math.copysign(1.0, math.sin(leg.angle)) for leg in spec.legs])
 
-    def joint_targets(self, xy: np.ndarray) -> np.ndarray:
+    def joint_targets(self, xy: np.ndarray, elbow_open: np.ndarray | None = None) -> np.ndarray:
         """xy: (..., 6, 2) oscillator outputs (rad) -> (..., 18) targets ordered yaw, shoulder, elbow per leg.
 
         Leading axes (e.g. the physics substeps of one control step) are kept, so a whole step maps at once.
+        `elbow_open` (..., 6) rad, broadcast against xy's legs: how far each elbow opens from its stance angle.
         """
         xy = np.asarray(xy)
         targets = np.empty((*xy.shape[:-1], 3))
         targets[..., 0] = self.yaw_sign * xy[..., 0]
         targets[..., 1] = self.stance_shoulder + self.lift_gain * np.maximum(xy[..., 1], 0.0)
-        targets[..., 2] = self.stance_elbow
+        targets[..., 2] = self.stance_elbow if elbow_open is None else self.stance_elbow + elbow_open
         return targets.reshape(*xy.shape[:-2], -1)
