@@ -22,15 +22,19 @@ _NORMAL = 7  # index of contactNormalOnB in a getContactPoints tuple
 _NORMAL_FORCE = 9  # index of the normal force in a getContactPoints tuple
 
 
+def _contact_points(client: int, body: int, link: int) -> tuple:
+    """The link's contact points, PyBullet tuples with the robot as body A."""
+    import pybullet as p
+
+    return p.getContactPoints(bodyA=body, linkIndexA=link, physicsClientId=client)
+
+
 def read_contacts(client: int, body: int, links: list[int]) -> np.ndarray:
     """(2, legs) float32: row 0 is 1 where a link has a contact point pressing with a positive normal force, row 1
     the summed normal force (N) on it."""
-    import pybullet as p
-
     out = np.zeros((2, len(links)), dtype=np.float32)
     for leg, link in enumerate(links):
-        force = sum(point[_NORMAL_FORCE] for point in
-                    p.getContactPoints(bodyA=body, linkIndexA=link, physicsClientId=client))
+        force = sum(point[_NORMAL_FORCE] for point in _contact_points(client, body, link))
         out[0, leg] = float(force > 0.0)
         out[1, leg] = force
     return out
@@ -39,14 +43,8 @@ def read_contacts(client: int, body: int, links: list[int]) -> np.ndarray:
 def contact_normals(client: int, body: int, links: list[int]) -> list[np.ndarray]:
     """Per link, a (points, 3) array of the unit normals of its contact points that press (positive normal force),
     each pointing from what it touches towards the robot (PyBullet's contactNormalOnB with the robot as body A)."""
-    import pybullet as p
-
-    out = []
-    for link in links:
-        points = p.getContactPoints(bodyA=body, linkIndexA=link, physicsClientId=client)
-        out.append(np.array([point[_NORMAL] for point in points if point[_NORMAL_FORCE] > 0.0], dtype=float)
-                   .reshape(-1, 3))
-    return out
+    return [np.array([point[_NORMAL] for point in _contact_points(client, body, link) if point[_NORMAL_FORCE] > 0.0],
+                     dtype=float).reshape(-1, 3) for link in links]
 
 
 class FootContacts(Sensor):
