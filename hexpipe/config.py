@@ -69,6 +69,9 @@ class SimConfig(_Section):
     # the elevator reflex (hexpipe/sim/elevator.py): elbow opening (rad) per rad of y for the rest of a swing in which
     # the leg's shin or foot touched something; 0 is off
     elevator_gain: Annotated[float, Field(ge=0.0, le=5.0)] = 0.0
+    # the heading reflex (hexpipe/sim/heading.py): change in each side's stride (fraction) per rad of yaw off the
+    # course; 0 is off
+    heading_gain: Annotated[float, Field(ge=0.0, le=5.0)] = 0.0
 
     @model_validator(mode="after")
     def _rates_divide(self) -> SimConfig:

@@ -62,6 +62,7 @@ from hexpipe.sensors.heightmap import HEADING_FRAME, quat_to_yaw, reference_heig
 from hexpipe.sim.cpg import CPG
 from hexpipe.sim.elevator import caught_legs, elbow_opening, pressed_from_side
 from hexpipe.sim.gait import GaitMap, slew_path
+from hexpipe.sim.heading import stride_scales
 from hexpipe.sim.lift_reflex import lift_reflex
 from hexpipe.sim.lift_trail import LiftTrail, foot_lags
 from hexpipe.sim.robot import Robot, RobotSpec, robot_shapes
@@ -229,6 +230,7 @@ class HexapodEnv(gym.Env):
         self._physics = (friction, mass_scale)
         self._xy = self.cpg.xy
         self._caught = np.zeros(len(self.robot_spec.legs), dtype=bool)  # legs the elevator reflex opens
+        self._yaw = 0.0  # the base's yaw (rad) after the last control step: the heading reflex steers by it
         targets = self.gait.joint_targets(self._xy)
         self.robot.reset_joints(targets)
         self._targets = targets
@@ -265,7 +267,10 @@ class HexapodEnv(gym.Env):
         xy = self.cpg.advance(command, self.physics_dt, self.substeps, floor, cap)
         elevator = self.sim_cfg.elevator_gain
         opening = elbow_opening(xy[..., 1], self._caught, elevator) if elevator > 0 else None
-        targets = slew_path(self._targets, self.gait.joint_targets(xy, opening), self._max_joint_step)
+        steer = None
+        if self.sim_cfg.heading_gain > 0:  # from the yaw the last control step ended with
+            steer = stride_scales(self._yaw, self.gait.yaw_sign, self.sim_cfg.heading_gain)
+        targets = slew_path(self._targets, self.gait.joint_targets(xy, opening, steer), self._max_joint_step)
         self._targets = targets[-1]
         self._xy = xy[-1]  # each leg's (x, y) now, with its lift floor (the recorder logs it)
         power = 0.0
@@ -280,6 +285,8 @@ class HexapodEnv(gym.Env):
             self._caught = caught_legs(self._caught, self._xy[:, 1], pressed)
 
         pos, quat, lin, _ = self.robot.base_state()
+        if self.sim_cfg.heading_gain > 0:
+            self._yaw = quat_to_yaw(quat)
         termination = None
         if not (np.all(np.isfinite(pos)) and np.all(np.isfinite(quat)) and np.all(np.isfinite(lin))):
             termination = "nonfinite"

@@ -62,15 +62,18 @@ class GaitMap:
         )
         self.yaw_sign = np.array([math.copysign(1.0, math.sin(leg.angle)) for leg in spec.legs])
 
-    def joint_targets(self, xy: np.ndarray, elbow_open: np.ndarray | None = None) -> np.ndarray:
+    def joint_targets(self, xy: np.ndarray, elbow_open: np.ndarray | None = None,
+                      stride_scale: np.ndarray | None = None) -> np.ndarray:
         """xy: (..., 6, 2) oscillator outputs (rad) -> (..., 18) targets ordered yaw, shoulder, elbow per leg.
 
         Leading axes (e.g. the physics substeps of one control step) are kept, so a whole step maps at once.
         `elbow_open` (..., 6) rad, broadcast against xy's legs: how far each elbow opens from its stance angle.
+        `stride_scale` (6,): a factor on each leg's fore/aft swing (the heading reflex, `hexpipe.sim.heading`).
         """
         xy = np.asarray(xy)
         targets = np.empty((*xy.shape[:-1], 3))
-        targets[..., 0] = self.yaw_sign * xy[..., 0]
+        sweep = self.yaw_sign if stride_scale is None else self.yaw_sign * stride_scale
+        targets[..., 0] = sweep * xy[..., 0]
         targets[..., 1] = self.stance_shoulder + self.lift_gain * np.maximum(xy[..., 1], 0.0)
         targets[..., 2] = self.stance_elbow if elbow_open is None else self.stance_elbow + elbow_open
         return targets.reshape(*xy.shape[:-2], -1)
