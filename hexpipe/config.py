@@ -230,6 +230,11 @@ class TaskConfig(_Section):
     # ahead of it rises or falls by more than 3 cm, so lifting costs only on level ground (null: charged everywhere).
     # [0.6, 0.7]: the feet reach 0.57 m behind and ahead of the base (reports/experiments/lift_zone/feet.py)
     lift_free_zone: tuple[Annotated[float, Field(ge=0)], Annotated[float, Field(ge=0)]] | None = (0.6, 0.7)
+    # [behind, ahead] (m): the zone whose relief waives the lift price, when it should differ from lift_free_zone,
+    # which the stride reflex also reads; null: lift_free_zone. Past a block, 0.6 m behind keeps the lift free until
+    # the block is 0.6 m behind the body, where the adaptation measure's open ground starts 0.5 m past it (the
+    # `lift_select5` readout: the draws that miss adaptation let b down late there)
+    lift_price_zone: tuple[Annotated[float, Field(ge=0)], Annotated[float, Field(ge=0)]] | None = None
     # minus this much reward once when an episode ends stuck or fallen: with a high power price, giving up at the
     # block face otherwise pays better than a slow, costly climb (reports/experiments/README.md, "price"); 0 = off
     failure_penalty: Annotated[float, Field(ge=0)] = 1000.0
@@ -283,6 +288,19 @@ class TaskConfig(_Section):
             raise ValueError(f"lift_reflex_zone {list(self.lift_reflex_zone)} is the zone the lift reflex reads, "
                              "but neither lift_reflex nor lift_teacher is on; turn one on or set it to null")
         return self
+
+    @model_validator(mode="after")
+    def _lift_price_zone_is_read(self) -> TaskConfig:
+        if self.lift_price_zone is not None and self.lift_cost == 0:
+            raise ValueError(f"lift_price_zone {list(self.lift_price_zone)} is where the lift price is waived, but "
+                             "lift_cost is 0; set lift_cost or set lift_price_zone to null")
+        return self
+
+    @property
+    def price_zone(self) -> tuple[float, float] | None:
+        """[behind, ahead] (m): the zone whose relief waives the lift price, lift_price_zone or else
+        lift_free_zone (None: the price is charged everywhere)."""
+        return self.lift_price_zone or self.lift_free_zone
 
     @property
     def lift_zone(self) -> tuple[float, float]:

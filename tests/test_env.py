@@ -287,6 +287,31 @@ def test_a_lift_free_zone_waives_the_lift_price_near_the_block_and_charges_it_on
     assert near == [0.0] * len(near)
 
 
+def test_a_lift_price_zone_charges_the_lift_sooner_past_the_block_and_leaves_the_rest_as_lift_free_zone():
+    """task.lift_price_zone moves only the price's waiver: with 0.1 m behind instead of 0.6, the high gait pays
+    again once the block's back edge (1.3 m) is 0.1 m behind, not 0.6 m; before the block both waive alike."""
+    lift_by_x = {}
+    for price_zone in (None, (0.1, 0.7)):
+        task = TaskConfig(sensors=(), lift_cost=10.0, lift_free_zone=(0.6, 0.7), lift_price_zone=price_zone)
+        env = HexapodEnv("single_block", cpg=holding(HIGH_GAIT), initial_cpg=HIGH_GAIT, task=task)
+        env.reset(seed=0)
+        rows = []
+        for _ in range(2000):
+            _, _, terminated, truncated, info = env.step(np.zeros(3))
+            rows.append((float(env.robot.base_state()[0][0]), info["reward_terms"]["lift"]))
+            if terminated or truncated or rows[-1][0] > 2.1:
+                break
+        env.close()
+        lift_by_x[price_zone] = rows
+    charged = -10.0 * (HIGH_GAIT[1] - 0.2)
+    default, near = lift_by_x[None], lift_by_x[(0.1, 0.7)]
+    assert [x for x, _ in default] == [x for x, _ in near]  # the price moves no leg: the same walk
+    for rows in (default, near):
+        assert all(lift == 0.0 for x, lift in rows if 0.45 < x < 1.35)
+    past = [(x, a, b) for (x, a), (_, b) in zip(default, near, strict=False) if 1.5 < x < 1.85]
+    assert past and all(a == 0.0 and b == pytest.approx(charged) for _, a, b in past)
+
+
 def test_the_lift_free_zone_asks_the_terrain_nothing_while_the_lift_price_is_ramped_to_zero(monkeypatch):
     """ppo.lift_cost_ramp holds the price's share at 0 for the first part of training: the zone's check (30 us a
     step, benchmarks/bench_lift_free.py) is skipped there, and only there."""

@@ -20,10 +20,10 @@ and the reward charges a's distance from its stride; with `TaskConfig.stride_ref
 a stride than that reflex's (a shorter one at the straddle of two blocks); `info["stride"]` is the stride (rad).
 Reward: `reward_scale` * forward velocity (m/s, displacement over the control step), as in the paper, minus
 `power_cost` * mean mechanical joint power (W) when that is set (0 is the paper's reward), minus `lift_cost` * the lift
-b above its floor (rad) when that is set (waived near uneven terrain with `lift_free_zone`), minus `failure_penalty`
-once when the episode ends stuck or fallen, minus `lift_teacher` * b's shortfall below the reflex's lift when that
-is set, minus `stride_teacher` * a's distance from the stride reflex's when that is set, minus `time_cost` per s
-of episode time when that is set.
+b above its floor (rad) when that is set (waived near uneven terrain with `lift_price_zone`, else `lift_free_zone`),
+minus `failure_penalty` once when the episode ends stuck or fallen, minus `lift_teacher` * b's shortfall below the
+reflex's lift when that is set, minus `stride_teacher` * a's distance from the stride reflex's when that is set,
+minus `time_cost` per s of episode time when that is set.
 Terminates on `goal` (3 m forward), `stuck` (too little progress over a window), `fall` (tilt or base too low)
 or `nonfinite` physics; truncates at the time limit. `info` carries distance, success, termination and the
 reward terms.
@@ -329,9 +329,10 @@ class HexapodEnv(gym.Env):
         return terms
 
     def _lift_free(self, pos: np.ndarray, quat: np.ndarray) -> bool:
-        """Whether task.lift_free_zone waives the lift price this step: the terrain from `behind` m behind the body
-        to `ahead` m ahead of it rises or falls by more than a few cm (true terrain, seen by the reward only)."""
-        zone = self.task.lift_free_zone
+        """Whether the price zone (task.lift_price_zone, else lift_free_zone) waives the lift price this step: the
+        terrain from `behind` m behind the body to `ahead` m ahead of it rises or falls by more than a few cm (true
+        terrain, seen by the reward only)."""
+        zone = self.task.price_zone
         charged = self.task.lift_cost * self.lift_cost_share  # 0 during ppo.lift_cost_ramp's first part
         if zone is None or charged == 0.0 or not np.all(np.isfinite(pos)):
             return False
