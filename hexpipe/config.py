@@ -232,8 +232,8 @@ class TaskConfig(_Section):
     lift_free_zone: tuple[Annotated[float, Field(ge=0)], Annotated[float, Field(ge=0)]] | None = (0.6, 0.7)
     # [behind, ahead] (m): the zone whose relief waives the lift price, when it should differ from lift_free_zone,
     # which the stride reflex also reads; null: lift_free_zone. Past a block, 0.6 m behind keeps the lift free until
-    # the block is 0.6 m behind the body, where the adaptation measure's open ground starts 0.5 m past it (the
-    # `lift_select5` readout: the draws that miss adaptation let b down late there)
+    # the block is 0.6 m behind the body, where the adaptation measure's open ground starts 0.5 m past it; [0.2, 0.7]
+    # did not bring b down there on trained policies, so it is off (the `pricezone` sweep)
     lift_price_zone: tuple[Annotated[float, Field(ge=0)], Annotated[float, Field(ge=0)]] | None = None
     # minus this much reward once when an episode ends stuck or fallen: with a high power price, giving up at the
     # block face otherwise pays better than a slow, costly climb (reports/experiments/README.md, "price"); 0 = off
