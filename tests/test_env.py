@@ -308,7 +308,7 @@ def test_a_lift_price_zone_charges_the_lift_sooner_past_the_block_and_leaves_the
     assert [x for x, _ in default] == [x for x, _ in near]  # the price moves no leg: the same walk
     for rows in (default, near):
         assert all(lift == 0.0 for x, lift in rows if 0.45 < x < 1.35)
-    past = [(x, a, b) for (x, a), (_, b) in zip(default, near, strict=False) if 1.5 < x < 1.85]
+    past = [(x, a, b) for (x, a), (_, b) in zip(default, near, strict=True) if 1.5 < x < 1.85]
     assert past and all(a == 0.0 and b == pytest.approx(charged) for _, a, b in past)
 
 

@@ -23,8 +23,7 @@ TERRAINS = ("flat", "single_block", "wide_block", "tall_block", "steps_up", "rou
 
 def digest(terrain: str, steps: int, seed: int, overrides: list[str]) -> tuple[str, str]:
     params = load_params("params.yaml", overrides)
-    env = HexapodEnv(terrain=terrain, sim=params.sim, cpg=params.cpg, sensors=params.sensors, task=params.task,
-                     randomize=True)
+    env = HexapodEnv.from_params(params, terrain, randomize=True)
     rng = np.random.default_rng(seed)
     h = hashlib.sha256()
     obs, _ = env.reset(seed=seed)
