@@ -7,7 +7,8 @@ is how this was used: which half moves between kinds.
 
 Each argument is SWEEP:CONDITION, a folder under reports/sweeps and the condition of its trials to read.
 Prints each draw's row, then per sweep the mean of each column with a 95% bootstrap interval over draws and how
-many draws lift 0.15 or more.
+many draws lift 0.15 or more; with several arms, the pooled share of draws that do (Wilson interval) and the
+chance, at that share, that five independent draws all do (what a five-pipeline every-draw floor asks).
 """
 
 from __future__ import annotations
@@ -66,6 +67,12 @@ def main() -> None:
             parts.append(f"{column} {est.value:.3f} [{est.low:.3f}, {est.high:.3f}]")
         reach = int((mine["lift"] >= FLOOR).sum())
         print(f"{name}: {len(mine)} draws; " + "; ".join(parts) + f"; {reach} of {len(mine)} lift {FLOOR} or more")
+    if len(a.arms) > 1:
+        reach, n = int((table["lift"] >= FLOOR).sum()), len(table)
+        rate = stats.wilson(reach, n)
+        print(f"pooled: {reach} of {n} draws lift {FLOOR} or more, {rate.value:.2f} [{rate.low:.2f}, {rate.high:.2f}] "
+              f"(Wilson 95%); five draws of five at that rate: {rate.value ** 5:.2f} [{rate.low ** 5:.2f}, "
+              f"{rate.high ** 5:.2f}]")
 
 
 if __name__ == "__main__":
