@@ -11,7 +11,11 @@ episodes at that `sim.heading_gain` in the `--fixed` CSV (heading.py's, the same
 reflexes are part of the robot, so a policy is held against the gaits walking with the reflex it trained with.
 Prints, per arm, each draw's count of dominated terrains (of the CSV's terrains) and by which gaits, the mean over
 draws with a 95% bootstrap interval over seeds, and per terrain how many draws are dominated; with two arms, the
-second minus the first over the seeds both have.
+second minus the first over the seeds both have. Several report folders may be given: each arm's condition is
+read from all of them, so two sweeps' conditions pair draw by draw (the same seeds):
+
+    .venv/bin/python reports/experiments/head150/dominance.py reports/sweeps/one5 reports/sweeps/pin150 \
+        --fixed reports/experiments/one5/fixed_gaits.csv --arm free80e04:1 --arm pin150:1
 """
 
 from __future__ import annotations
@@ -56,22 +60,22 @@ def dominated_by(policy: pd.Series, gaits: pd.DataFrame) -> list[str]:
     return list(gaits.index[beats])
 
 
-def policy_episodes(report: Path, condition: str) -> pd.DataFrame:
-    rows = [{**ep, "seed": record["seed"]} for record in load_records([report], condition)
+def policy_episodes(reports: list[Path], condition: str) -> pd.DataFrame:
+    rows = [{**ep, "seed": record["seed"]} for record in load_records(reports, condition)
             for ep in record["episodes"] if ep["controller"] == "policy"]
     if not rows:
-        raise SystemExit(f"error: no complete {condition} trials in {report}")
+        raise SystemExit(f"error: no complete {condition} trials in {', '.join(map(str, reports))}")
     return pd.DataFrame(rows)
 
 
-def arm_counts(report: Path, condition: str, gain: float, fixed: pd.DataFrame) -> pd.DataFrame:
+def arm_counts(reports: list[Path], condition: str, gain: float, fixed: pd.DataFrame) -> pd.DataFrame:
     """One row per draw (seed): the number of terrains on which some gait dominates it, and the gaits that do."""
     gaits = fixed[fixed["gain"] == gain]
     if gaits.empty:
         raise SystemExit(f"error: the fixed gaits' CSV has no episodes at gain {gain:g}")
     gait_table = outcomes(gaits, "controller").rename(index=label, level="controller")
     terrains = sorted(gaits["terrain"].unique())
-    mine = outcomes(policy_episodes(report, condition), "seed")
+    mine = outcomes(policy_episodes(reports, condition), "seed")
     rows = []
     for seed in sorted(mine.index.get_level_values("seed").unique()):
         hit = {t: dominated_by(mine.loc[(seed, t)], gait_table.xs(t, level="terrain"))
@@ -83,7 +87,7 @@ def arm_counts(report: Path, condition: str, gain: float, fixed: pd.DataFrame) -
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("report", type=Path, help="the sweep's report folder (reports/sweeps/NAME)")
+    ap.add_argument("reports", type=Path, nargs="+", help="the sweeps' report folders (reports/sweeps/NAME)")
     ap.add_argument("--fixed", type=Path, required=True, help="heading.py's CSV of the fixed gaits")
     ap.add_argument("--arm", dest="arms", action="append", required=True, metavar="CONDITION:GAIN")
     a = ap.parse_args()
@@ -98,7 +102,7 @@ def main() -> None:
     for arm in a.arms:
         condition, _, gain = arm.partition(":")
         try:
-            counts[arm] = arm_counts(a.report, condition, float(gain), fixed)
+            counts[arm] = arm_counts(a.reports, condition, float(gain), fixed)
         except ValueError:
             raise SystemExit(f"error: --arm {arm!r} is not CONDITION:GAIN") from None
     for arm, table in counts.items():

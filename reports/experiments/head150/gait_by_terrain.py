@@ -68,7 +68,7 @@ def main() -> None:
     fixed = fixed[fixed.get("gain", pd.Series(dtype=float)) == gain_value]
     if fixed.empty:
         raise SystemExit(f"error: {a.fixed} has no episodes at gain {gain_value:g}")
-    episodes = policy_episodes(a.report, condition)
+    episodes = policy_episodes([a.report], condition)
     pd.set_option("display.width", 250)
     pd.set_option("display.max_columns", 30)
     print(f"{condition}: {episodes['seed'].nunique()} draws, {len(episodes)} episodes; the policy's gait, then "
