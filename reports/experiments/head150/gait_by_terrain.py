@@ -23,8 +23,6 @@ from dominance import label, outcomes, policy_episodes
 
 from hexpipe.sweep import stats
 
-GAIT = ("a_mean", "b_mean", "omega_mean")
-
 
 def interval(values: pd.Series) -> str:
     """'mean [low, high]' over draws, a 95% bootstrap interval."""
@@ -40,14 +38,14 @@ def table(episodes: pd.DataFrame, fixed: pd.DataFrame) -> pd.DataFrame:
     for terrain, mine in per_draw.groupby(level="terrain"):
         walked = episodes[episodes["terrain"] == terrain]
         row = {"terrain": terrain, "success": round(float(walked["success"].mean()), 3),
-               **{k.removesuffix("_mean"): round(float(walked[k].mean()), 2) for k in GAIT},
+               "a": round(float(walked["a_mean"].mean()), 2), "b": round(float(walked["b_mean"].mean()), 2),
                "omega/pi": round(float(walked["omega_mean"].mean()) / math.pi, 2),
                "time": interval(mine["time"].dropna()), "cot": interval(mine["cot"].dropna())}
         for gait, theirs in gaits.xs(terrain, level="terrain").iterrows():
             row[f"{gait} time"] = round(float(theirs["time"]), 2)
             row[f"{gait} cot"] = round(float(theirs["cot"]), 2)
         rows.append(row)
-    return pd.DataFrame(rows).set_index("terrain").drop(columns="omega")
+    return pd.DataFrame(rows).set_index("terrain")
 
 
 def main() -> None:
@@ -65,7 +63,10 @@ def main() -> None:
         fixed = pd.read_csv(a.fixed)
     except (OSError, ValueError) as exc:
         raise SystemExit(f"error: {a.fixed}: {exc}") from None
-    fixed = fixed[fixed.get("gain", pd.Series(dtype=float)) == gain_value]
+    missing = {"controller", "gain", "terrain", "success", "time", "cost_of_transport"} - set(fixed.columns)
+    if missing:
+        raise SystemExit(f"error: {a.fixed} lacks the columns {sorted(missing)} (heading.py's --csv has them)")
+    fixed = fixed[fixed["gain"] == gain_value]
     if fixed.empty:
         raise SystemExit(f"error: {a.fixed} has no episodes at gain {gain_value:g}")
     episodes = policy_episodes([a.report], condition)
