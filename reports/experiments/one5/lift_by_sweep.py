@@ -14,10 +14,13 @@ chance, at that share, that five independent draws all do (what a five-pipeline 
 from __future__ import annotations
 
 import argparse
-import json
+import sys
 from pathlib import Path
 
 import pandas as pd
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "select"))
+from pipelines import load_records  # select/pipelines.py: a sweep's complete trial records
 
 from hexpipe.sweep import stats
 from hexpipe.sweep.tables import HOME_TERRAIN
@@ -28,10 +31,7 @@ FLOOR = 0.15  # issue 10's adaptation target (rad)
 def draws(sweep: Path, condition: str) -> pd.DataFrame:
     """One row per complete trial of `condition`: its seed, b before the face, b on open ground and their difference."""
     rows = []
-    for path in sorted(sweep.glob("*/result.json")):
-        record = json.loads(path.read_text())
-        if record.get("status") != "ok" or record.get("condition") != condition:
-            continue
+    for record in load_records([sweep], condition):
         home = pd.DataFrame([e for e in record["episodes"]
                              if e["controller"] == "policy" and e["terrain"] == HOME_TERRAIN])
         if home.empty:
