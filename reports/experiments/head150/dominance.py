@@ -60,6 +60,19 @@ def dominated_by(policy: pd.Series, gaits: pd.DataFrame) -> list[str]:
     return list(gaits.index[beats])
 
 
+def read_fixed(path: Path) -> pd.DataFrame:
+    """heading.py's CSV of the fixed gaits' episodes; one line, not a traceback, when it is unreadable or lacks the
+    columns these readouts use."""
+    try:
+        fixed = pd.read_csv(path)
+    except (OSError, ValueError) as exc:
+        raise SystemExit(f"error: {path}: {exc}") from None
+    missing = {"controller", "gain", "terrain", "success", "time", "cost_of_transport"} - set(fixed.columns)
+    if missing:
+        raise SystemExit(f"error: {path} lacks the columns {sorted(missing)} (heading.py's --csv has them)")
+    return fixed
+
+
 def policy_episodes(reports: list[Path], condition: str) -> pd.DataFrame:
     rows = [{**ep, "seed": record["seed"]} for record in load_records(reports, condition)
             for ep in record["episodes"] if ep["controller"] == "policy"]
@@ -91,13 +104,7 @@ def main() -> None:
     ap.add_argument("--fixed", type=Path, required=True, help="heading.py's CSV of the fixed gaits")
     ap.add_argument("--arm", dest="arms", action="append", required=True, metavar="CONDITION:GAIN")
     a = ap.parse_args()
-    try:
-        fixed = pd.read_csv(a.fixed)
-    except (OSError, ValueError) as exc:
-        raise SystemExit(f"error: {a.fixed}: {exc}") from None
-    missing = {"controller", "gain", "terrain", "success", "time", "cost_of_transport"} - set(fixed.columns)
-    if missing:
-        raise SystemExit(f"error: {a.fixed} lacks the columns {sorted(missing)} (heading.py's --csv has them)")
+    fixed = read_fixed(a.fixed)
     counts = {}
     for arm in a.arms:
         condition, _, gain = arm.partition(":")

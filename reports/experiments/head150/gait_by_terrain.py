@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from dominance import label, outcomes, policy_episodes
+from dominance import label, outcomes, policy_episodes, read_fixed
 
 from hexpipe.sweep import stats
 
@@ -59,13 +59,7 @@ def main() -> None:
         gain_value = float(gain)
     except ValueError:
         raise SystemExit(f"error: --arm {a.arm!r} is not CONDITION:GAIN") from None
-    try:
-        fixed = pd.read_csv(a.fixed)
-    except (OSError, ValueError) as exc:
-        raise SystemExit(f"error: {a.fixed}: {exc}") from None
-    missing = {"controller", "gain", "terrain", "success", "time", "cost_of_transport"} - set(fixed.columns)
-    if missing:
-        raise SystemExit(f"error: {a.fixed} lacks the columns {sorted(missing)} (heading.py's --csv has them)")
+    fixed = read_fixed(a.fixed)
     fixed = fixed[fixed["gain"] == gain_value]
     if fixed.empty:
         raise SystemExit(f"error: {a.fixed} has no episodes at gain {gain_value:g}")
