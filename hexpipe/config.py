@@ -3,10 +3,9 @@
 `load_params` is called once, by the CLI; everything below it receives the typed sections. Errors are
 `ConfigError` with one line naming the key at fault and what is allowed.
 
-The code defaults are params.yaml's but for the recipe: here the CPG is the general one and the robot bare (what
-the unit tests and library users get), while params.yaml holds the pipeline's recipe, `order1` since 2026-12-07:
-a in [0.6, 0.8] and omega in [pi, 1.5 pi] steered through their rate, both reflexes, the lift teacher and the stride
-reflex, the fall check at 0.04 m and one PPO candidate (tests/test_cli.py's PIPELINE_ONLY lists every such key).
+The code defaults are params.yaml's but for the gait: here a and omega are free (the general CPG that the unit
+tests and library users get), while params.yaml pins them at the fixed gait's with the stride reflex and a teacher
+of 60 (cpg.*, task.lift_teacher, task.stride_reflex: the pipeline's default since `pinned_stride60`).
 """
 
 from __future__ import annotations
