@@ -68,8 +68,9 @@ def repro_pipeline(reports: Path, episodes: int) -> tuple[int, list[float], dict
         if not path.is_file():
             raise SystemExit(f"error: --repro {reports}: {path} not found (a make repro reports folder holds it)")
     selection = json.loads((reports / "ppo" / "selection.json").read_text())
-    seeds = sorted(int(s) for s in selection["candidates"])
-    returns = [float(selection["candidates"][str(s)]["return"]) for s in seeds]
+    # one candidate and no validation episodes (the default since `order1`): nothing was scored
+    seeds = sorted(int(s) for s in selection["candidates"]) or [int(selection["chosen_seed"])]
+    returns = [float(selection["candidates"].get(str(s), {}).get("return", "nan")) for s in seeds]
     rows = pd.read_csv(reports / "eval" / "results.csv")
     rows = rows[rows["controller"].isin(REPRO_CONTROLLERS) & (rows["episode"] < episodes)]
     gait = rows.loc[rows["controller"] == "best_fixed", "gait"].dropna().unique().tolist()
