@@ -68,7 +68,7 @@ def repro_pipeline(reports: Path, episodes: int) -> tuple[int, list[float], dict
         if not path.is_file():
             raise SystemExit(f"error: --repro {reports}: {path} not found (a make repro reports folder holds it)")
     selection = json.loads((reports / "ppo" / "selection.json").read_text())
-    # one candidate and no validation episodes (the default since `order1`): nothing was scored
+    # one candidate and no validation episodes (`ppo.candidates: 1`, `validation_episodes: 0`, as adopt_order1 ran)
     seeds = sorted(int(s) for s in selection["candidates"]) or [int(selection["chosen_seed"])]
     returns = [float(selection["candidates"].get(str(s), {}).get("return", "nan")) for s in seeds]
     rows = pd.read_csv(reports / "eval" / "results.csv")
