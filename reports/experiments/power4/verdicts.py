@@ -12,9 +12,13 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 
 import pandas as pd
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "select"))
+from pipelines import load_records  # select/pipelines.py: a sweep's complete trial records
 
 from hexpipe.sweep import stats
 
@@ -32,14 +36,17 @@ def arm_verdicts(arm: str) -> pd.DataFrame:
     if not folder.is_dir():
         raise SystemExit(f"error: arm {arm!r}: no sweep folder {folder}")
     rows = []
-    for metrics_path in sorted(folder.glob(f"{condition}-seed*/eval/metrics.json")):
+    for record in load_records([folder], condition):
+        metrics_path = folder / record["trial"] / "eval" / "metrics.json"
+        if not metrics_path.is_file():
+            raise SystemExit(f"error: arm {arm!r}: {metrics_path} not found (a complete trial's evaluation holds it)")
         metrics = json.loads(metrics_path.read_text())
-        seed = int(metrics_path.parts[-3].rsplit("-seed", 1)[1])
         beaten = [key[len(PREFIX):] for key, value in metrics.items()
                   if key.startswith(PREFIX) and key[len(PREFIX):] not in SUMMARY_KEYS and value == 1]
-        rows.append({"seed": seed, "beaten": int(metrics[f"{PREFIX}terrains_beaten"]), "terrains": " ".join(beaten)})
+        rows.append({"seed": int(record["seed"]), "beaten": int(metrics[f"{PREFIX}terrains_beaten"]),
+                     "terrains": " ".join(beaten)})
     if not rows:
-        raise SystemExit(f"error: arm {arm!r}: no evaluated trials of {condition!r} in {folder}")
+        raise SystemExit(f"error: arm {arm!r}: no complete trials of {condition!r} in {folder}")
     return pd.DataFrame(rows).set_index("seed").sort_index()
 
 
