@@ -259,6 +259,11 @@ class TaskConfig(_Section):
     # lift_free_zone's 0.6 m behind does (the held low gait still crosses); on trained policies it closes their misses
     # as the default zone does, and hands the fixed gait the same lift (the `near_lift` readout)
     lift_reflex_zone: tuple[Annotated[float, Field(ge=0)], Annotated[float, Field(ge=0)]] | None = None
+    # m: the relief (rise or fall within the zone) at which the lift reflex, as leg mover or teacher, asks for b's
+    # ceiling; less relief asks proportionally less of the way up from b's floor (a 6 cm step 0.6 of it at 0.1), so
+    # a low block or rough ground is not taught the tall block's lift; null: the ceiling wherever the relief passes
+    # 3 cm (the `relief_teacher` sweep)
+    lift_reflex_relief: Annotated[float, Field(gt=0.03)] | None = None
     # minus this much reward per rad the policy's b falls short of that reflex's lift, each control step: the reflex
     # as a teacher of where to lift, not a leg mover (that is lift_reflex); a training signal only, since evaluate
     # scores gaits, not rewards, so the policy walks without it (the `teacher` and `open` sweeps); 0 = off
@@ -287,6 +292,13 @@ class TaskConfig(_Section):
         if self.lift_reflex_zone is not None and not self.reads_reflex:
             raise ValueError(f"lift_reflex_zone {list(self.lift_reflex_zone)} is the zone the lift reflex reads, "
                              "but neither lift_reflex nor lift_teacher is on; turn one on or set it to null")
+        return self
+
+    @model_validator(mode="after")
+    def _lift_reflex_relief_is_read(self) -> TaskConfig:
+        if self.lift_reflex_relief is not None and not self.reads_reflex:
+            raise ValueError(f"lift_reflex_relief {self.lift_reflex_relief} scales the lift reflex's lift, but neither "
+                             "lift_reflex nor lift_teacher is on; turn one on or set it to null")
         return self
 
     @model_validator(mode="after")

@@ -179,3 +179,44 @@ def test_a_zone_of_its_own_is_refused_in_one_line_when_no_reflex_reads_it_or_it_
     params = apply_overrides(Params(), ["task.lift_reflex=true", "task.lift_reflex_zone=[0.2, 0.7]",
                                         "task.lift_free_zone=null", "task.lift_teacher=0"])
     assert params.task.lift_zone == (0.2, 0.7)
+
+
+def test_a_relief_scale_asks_a_low_step_for_less_lift_and_a_full_block_for_the_ceiling():
+    """task.lift_reflex_relief: at 0.10 m a 6 cm rise asks 0.6 of the way from b's floor to its ceiling, a 10 cm
+    block (or taller) all of it, and 2 cm, under the 3 cm that counts as uneven, nothing."""
+    mask = zone_mask(-0.6, 1.4, 32, 32, 1.6, behind=0.6, ahead=0.7)
+    reflex = lift_reflex(mask, relief=0.03, floor=0.2, ceiling=0.5, rise=10.0, fall=10.0, full_relief=0.10)
+    levels = {}
+    for height in (0.02, 0.06, 0.10, 0.12):
+        block = np.zeros((32, 32))
+        block[15:, :] = height
+        reflex.see(block)
+        levels[height] = reflex.advance(0.05)
+    assert levels == pytest.approx({0.02: 0.2, 0.06: 0.38, 0.10: 0.5, 0.12: 0.5})
+    unscaled = lift_reflex(mask, relief=0.03, floor=0.2, ceiling=0.5, rise=10.0, fall=10.0)
+    block = np.zeros((32, 32))
+    block[15:, :] = 0.06
+    unscaled.see(block)
+    assert unscaled.advance(0.05) == 0.5  # null: the ceiling for any relief over 3 cm
+
+
+def test_the_teacher_with_a_relief_scale_asks_the_low_block_for_less_than_the_single_block():
+    """In the env: the teacher's largest charge before the low block's 6 cm face is about 0.6 of the single block's
+    (the map reads the face at 5.3 cm: the lift asked is 0.2 + 0.53 * 0.3 = 0.36 rad against 0.5)."""
+    task = TEACHER.model_copy(update={"lift_reflex_relief": 0.10})
+    worst = {}
+    for terrain in ("single_block", "low_block"):
+        _, steps = walk_held(terrain, LOW_GAIT, task, lambda x, info: (x, info["reward_terms"]["teacher"]))
+        worst[terrain] = min(t for x, t in steps if 0.3 < x < 0.9)
+    assert worst["single_block"] == pytest.approx(-30.0 * (0.5 - LOW_GAIT[1]))
+    assert 0.5 < worst["low_block"] / worst["single_block"] < 0.7
+
+
+def test_a_relief_scale_is_refused_in_one_line_when_no_reflex_reads_it_or_it_is_under_3_cm():
+    with pytest.raises(ConfigError, match=r"lift_reflex_relief 0.1 .*neither lift_reflex nor lift_teacher") as exc:
+        apply_overrides(Params(), ["task.lift_teacher=0", "task.lift_reflex_relief=0.1"])
+    assert "\n" not in str(exc.value)
+    with pytest.raises(ConfigError, match="lift_reflex_relief") as exc:
+        apply_overrides(Params(), ["task.lift_reflex_relief=0.02"])
+    assert "\n" not in str(exc.value)
+    assert apply_overrides(Params(), ["task.lift_reflex_relief=0.1"]).task.lift_reflex_relief == 0.1

@@ -151,7 +151,8 @@ class HexapodEnv(gym.Env):
                       if self.cpg_cfg.lift_follows else None)
         on_map = partial(reflex_zone, self.sensor_cfg)
         self.reflex = (lift_reflex(on_map(self.task.lift_zone), RELIEF_M, self.cpg_cfg.lower[1], self.cpg_cfg.upper[1],
-                                   self.cpg_cfg.rate_limit[1], self.cpg_cfg.falling_limit[1])
+                                   self.cpg_cfg.rate_limit[1], self.cpg_cfg.falling_limit[1],
+                                   self.task.lift_reflex_relief)
                        if self.task.reads_reflex else None)  # moves the legs only with task.lift_reflex
         short = self.task.stride_reflex or self.cpg_cfg.lower[0]  # the teacher alone asks for a's floor
         self.stride_reflex = (stride_reflex(on_map(self.task.lift_free_zone), short, self.cpg_cfg.upper[0],

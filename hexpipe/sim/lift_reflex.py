@@ -31,9 +31,12 @@ def map_relief(heightmap: np.ndarray, mask: np.ndarray) -> float:
     return float(cells.max() - cells.min())
 
 
-def lift_reflex(mask: np.ndarray, relief: float, floor: float, ceiling: float, rise: float, fall: float) -> ZoneReflex:
+def lift_reflex(mask: np.ndarray, relief: float, floor: float, ceiling: float, rise: float, fall: float,
+                full_relief: float | None = None) -> ZoneReflex:
     """The lift (rad): toward `ceiling` while the zone (`mask`) rises or falls by more than `relief` m (the env
     passes the lift price's waiver, `hexpipe.envs.rewards.RELIEF_M`), toward `floor` elsewhere; floor, ceiling: b's
-    bounds; rise, fall: b's rate bounds (rad/s)."""
+    bounds; rise, fall: b's rate bounds (rad/s). With `full_relief` (m), a relief under it asks only that fraction
+    of the way from floor to ceiling: a 6 cm step less lift than a 10 cm block (task.lift_reflex_relief)."""
+    strength = None if full_relief is None else (lambda heights, zone: map_relief(heights, zone) / full_relief)
     return ZoneReflex("lift", mask, lambda heights, zone: map_relief(heights, zone) > relief, floor, ceiling, rise,
-                      fall)
+                      fall, strength)

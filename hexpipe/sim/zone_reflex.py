@@ -18,6 +18,7 @@ import numpy as np
 HALF_WIDTH = 0.3  # m to either side of the heading: the feet's lateral reach, as `Terrain.relief` samples it
 
 Trigger = Callable[[np.ndarray, np.ndarray], bool]  # (heights (rows, cols) m, zone mask) -> does the reflex act
+Strength = Callable[[np.ndarray, np.ndarray], float]  # (heights, zone mask) -> how far toward `active`, in [0, 1]
 
 
 def zone_mask(
@@ -41,26 +42,30 @@ class ZoneReflex:
     """A level (rad) over an episode: `see` each height map, `advance` once per control step."""
 
     def __init__(self, name: str, mask: np.ndarray, trigger: Trigger, idle: float, active: float, rise: float,
-                 fall: float):
+                 fall: float, strength: Strength | None = None):
         """name: for errors ("lift", "stride"); mask: the zone's cells (`zone_mask`); trigger: whether a map's zone
         calls for `active`; idle, active: the level elsewhere and while triggered (rad; it starts at idle); rise,
-        fall: the level's rate bounds (rad/s)."""
+        fall: the level's rate bounds (rad/s); strength: while triggered, the fraction of the way from idle to
+        active the map's zone calls for (None: all of it)."""
         if not mask.any():
             raise ValueError(f"the {name} reflex's zone holds no height-map cell")
-        self.mask, self.trigger = mask, trigger
+        self.mask, self.trigger, self.strength = mask, trigger, strength
         self.idle, self.active, self.rise, self.fall = idle, active, rise, fall
-        self.level, self.triggered = idle, False
+        self.level, self.triggered, self.fraction = idle, False, 1.0
 
     def reset(self) -> None:
-        self.level, self.triggered = self.idle, False
+        self.level, self.triggered, self.fraction = self.idle, False, 1.0
 
     def see(self, heightmap: np.ndarray) -> None:
         """Read the zone of this height map (rows x cols, m)."""
-        self.triggered = bool(self.trigger(np.asarray(heightmap, dtype=float).reshape(self.mask.shape), self.mask))
+        heights = np.asarray(heightmap, dtype=float).reshape(self.mask.shape)
+        self.triggered = bool(self.trigger(heights, self.mask))
+        if self.triggered and self.strength is not None:
+            self.fraction = min(1.0, max(0.0, float(self.strength(heights, self.mask))))
 
     def advance(self, dt: float) -> float:
-        """The level (rad) for the next `dt` s: ramped toward `active` while the last map triggered the reflex,
-        else toward `idle`."""
-        target = self.active if self.triggered else self.idle
+        """The level (rad) for the next `dt` s: ramped toward `active` (or the strength's fraction of the way there)
+        while the last map triggered the reflex, else toward `idle`."""
+        target = self.idle + (self.active - self.idle) * self.fraction if self.triggered else self.idle
         self.level = ramp_toward(self.level, target, self.rise, self.fall, dt)
         return self.level
