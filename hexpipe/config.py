@@ -504,6 +504,10 @@ class EvalConfig(_Section):
     workers: Annotated[int, Field(ge=1, le=256)] = 2  # episode worker processes, one env (about one core) each
     policy_dir: str = "data/models/ppo"
     blind_policy_dir: str = ""  # optional blind PPO (ppo.blind=true) compared as the `blind` controller
+    # (a, b, omega): a fixed gait walked with the lift reflex moving the legs (task.lift_reflex; its zone and relief
+    # are task.*'s), compared as `reflex_gait`: a hand-made adaptive gait, low on open ground and lifting where the
+    # height map shows relief, for a learned lift to beat (issue 10's `oracle125`); null: not run
+    reflex_gait: tuple[PositiveFloat, PositiveFloat, PositiveFloat] | None = None
     out_dir: str = "data/eval"
     report_dir: str = "reports/eval"
 
@@ -581,6 +585,25 @@ class Params(_Section):
                 raise ValueError(f"task.{key} {list(zone)} lies outside the height map "
                                  f"(sensors.heightmap_ahead {list(self.sensors.heightmap_ahead)}): "
                                  f"{task._zone_readers('see')} none of it")
+        return self
+
+    @model_validator(mode="after")
+    def _reflex_gait_can_lift(self) -> Params:
+        """eval.reflex_gait walks with the lift reflex: it needs a zone on the height map, and room between the gait's
+        b and cpg.upper's b, the lift the reflex swings to."""
+        gait, task = self.eval.reflex_gait, self.task
+        if gait is None:
+            return self
+        zone = task.lift_reflex_zone or task.lift_free_zone
+        if zone is None:
+            raise ValueError("eval.reflex_gait walks with the lift reflex, which reads task.lift_reflex_zone or else "
+                             "task.lift_free_zone; both are null: set one, e.g. [0.6, 0.7]")
+        if not reflex_zone(self.sensors, zone).any():
+            raise ValueError(f"eval.reflex_gait's lift reflex reads {list(zone)} m, which lies outside the height map "
+                             f"(sensors.heightmap_ahead {list(self.sensors.heightmap_ahead)})")
+        if not gait[1] < self.cpg.upper[1]:
+            raise ValueError(f"eval.reflex_gait's b ({gait[1]}) must lie below cpg.upper's b ({self.cpg.upper[1]}), "
+                             "the lift its reflex swings to; at or above it the reflex never lifts")
         return self
 
     @model_validator(mode="after")

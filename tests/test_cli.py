@@ -63,6 +63,8 @@ def test_overrides_are_typed_and_nested():
         ("ppo.train_terrains=[flat, rough, stairs]", "train_terrains has 3 terrains but n_envs=2"),
         ("ppo.train_terrains=[]", "train_terrains is empty"),
         ("task.power_cost=-0.1", "task.power_cost"),
+        ("eval.reflex_gait=[0.4, 0.5, 3.141593]", "eval.reflex_gait's b (0.5) must lie below cpg.upper's b"),
+        ("eval.reflex_gait=[0.4, 0.2]", "eval.reflex_gait"),
         ("task.failure_penalty=-5", "task.failure_penalty"),
     ],
 )

@@ -113,6 +113,32 @@ def test_evaluate_writes_metrics_report_recordings_and_video(blind):
     assert not list(out.rglob("*.tmp*")) and not list(report.rglob("*.tmp*"))
 
 
+def test_evaluate_with_a_reflex_gait_also_judges_the_policy_against_it(seeing, tmp_path):
+    """eval.reflex_gait adds the hand-made adaptive baseline: its rows, its metrics and a second verdict."""
+    cfg = seeing.eval.model_copy(update={
+        "reflex_gait": (0.3, 0.2, 4.712389), "terrains": ("single_block",), "episodes": 1, "record_video": False,
+        "log_episodes": 0, "out_dir": str(tmp_path / "eval"), "report_dir": str(tmp_path / "report")})
+    evaluate(seeing.model_copy(update={"eval": cfg}), show_progress=False)
+    metrics = json.loads((tmp_path / "report" / "metrics.json").read_text())
+    assert list(metrics["single_block"]) == ["policy", "best_fixed", "reflex_gait", "open_loop"]
+    assert metrics["verdict_vs_reflex_gait/policy/terrains"] == 1
+    assert metrics["verdict_vs_reflex_gait/policy/terrains_beaten"] in (0, 1)
+    text = (tmp_path / "report" / "report.md").read_text()
+    assert "Against `reflex_gait`" in text and "a=0.30 b=0.20 omega=1.50pi with the lift reflex moving" in text
+
+
+def test_the_reflex_gait_crosses_the_block_its_fixed_gait_stalls_at():
+    """The physical premise of `reflex_gait`: a gait at b's floor stalls at the block; the same gait with the lift
+    reflex moving its legs crosses it, and the params' own task.lift_reflex stays off."""
+    params = load_params(ROOT / "params.yaml", ["eval.reflex_gait=[0.4, 0.2, 3.141593]"])
+    scenario, gait = load_scenarios(["single_block"])[0], params.eval.reflex_gait
+    plain = run_episode(params, EpisodeJob(scenario, ControllerSpec("best_fixed", gait=gait), 0, 1000)).row
+    by_hand = run_episode(params, EpisodeJob(scenario, ControllerSpec("reflex_gait", gait=gait, lift_reflex=True), 0,
+                                             1000)).row
+    assert plain["termination"] == "stuck" and plain["distance"] < 1.0
+    assert by_hand["success"] and not params.task.lift_reflex
+
+
 def test_missing_policy_names_the_path_and_the_fix(tmp_path):
     params = Params()
     with pytest.raises(PolicyError, match="train-ppo") as err:

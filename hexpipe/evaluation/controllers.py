@@ -3,6 +3,7 @@
 - `policy`: the learned PPO policy (eval.policy_dir);
 - `blind`: a PPO policy trained without the terrain embedding (eval.blind_policy_dir, optional);
 - `best_fixed`: the best constant gait of the grid eval.grid_a x grid_b x grid_omega on the training terrains;
+- `reflex_gait`: the fixed gait eval.reflex_gait with the lift reflex moving the legs (optional): adaptation by hand;
 - `open_loop`: the CPG left at cpg.initial, i.e. what the policy starts from before it steers anything.
 
 A fixed gait is the env with a zero action: the CPG parameters start at the gait with zero rates, and a zero second
@@ -25,7 +26,7 @@ from hexpipe.rl.policy import LoadedPolicy, load_policy
 
 Gait = tuple[float, float, float]  # (a, b, omega): rad, rad, rad/s
 
-ORDER = ("policy", "blind", "best_fixed", "open_loop")  # report order
+ORDER = ("policy", "blind", "best_fixed", "reflex_gait", "open_loop")  # report order
 GRID = "grid"  # controller name of the grid-search episodes
 
 
@@ -38,12 +39,14 @@ class Controller(Protocol):
 
 @dataclass(frozen=True)
 class ControllerSpec:
-    """What to run: a learned policy (`policy_dir`) or a fixed gait (`gait`, None = cpg.initial)."""
+    """What to run: a learned policy (`policy_dir`) or a fixed gait (`gait`, None = cpg.initial); `lift_reflex`:
+    the env's lift reflex moves the legs (task.lift_reflex) whatever the params say."""
 
     name: str
     policy_dir: str | None = None
     expect_blind: bool | None = None
     gait: Gait | None = None
+    lift_reflex: bool = False
 
 
 @dataclass(frozen=True)

@@ -131,6 +131,8 @@ def run_episode(params: Params, job: EpisodeJob, on_step: StepHook | None = None
     start = time.perf_counter()
     if job.controller.gait is not None:  # the floors bound what a policy may choose, not a gait it is compared with
         params = params.model_copy(update={"cpg": params.cpg.holding(job.controller.gait)})
+    if job.controller.lift_reflex:  # the hand-made adaptive baseline: the reflex, not the controller, lifts the legs
+        params = params.model_copy(update={"task": params.task.model_copy(update={"lift_reflex": True})})
     controller = build(job.controller, params)
     env = HexapodEnv.from_params(
         params, job.scenario.recipe, obs_sensors=controller.sensors, initial_cpg=controller.initial_cpg,

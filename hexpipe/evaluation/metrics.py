@@ -203,6 +203,10 @@ def summary_numbers(table: Table, terrains: Sequence[str], learned: Sequence[str
             out[f"verdict/{name}/terrains_beaten"] = sum(v.beats for v in calls)
             out[f"verdict/{name}/terrains"] = len(calls)
             out |= {f"verdict/{name}/{v.terrain}": int(v.beats) for v in calls}
+        by_hand = verdict(table, terrains, name, baseline="reflex_gait")  # only when eval.reflex_gait ran
+        if by_hand:
+            out[f"verdict_vs_reflex_gait/{name}/terrains_beaten"] = sum(v.beats for v in by_hand)
+            out[f"verdict_vs_reflex_gait/{name}/terrains"] = len(by_hand)
         out |= {f"adaptation/{name}/{k}": v for k, v in adaptation(table, name).items()}
     return out
 

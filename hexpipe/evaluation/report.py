@@ -192,14 +192,14 @@ def _mark(ok: bool) -> str:
     return "yes" if ok else "**no**"
 
 
-def verdict_table(table: Table, terrains: Sequence[str], learned: str) -> str:
-    """Per terrain: the learned controller's and the best fixed gait's figures, and which criteria it meets."""
-    calls = verdict(table, terrains, learned)
+def verdict_table(table: Table, terrains: Sequence[str], learned: str, baseline: str = "best_fixed") -> str:
+    """Per terrain: the learned controller's and the baseline's figures, and which criteria it meets."""
+    calls = verdict(table, terrains, learned, baseline)
     if not calls:
-        return f"_`{learned}` and `best_fixed` share no terrain._"
+        return f"_`{learned}` and `{baseline}` share no terrain._"
     rows = []
     for v in calls:
-        ours, theirs = table[v.terrain][learned], table[v.terrain]["best_fixed"]
+        ours, theirs = table[v.terrain][learned], table[v.terrain][baseline]
         rows.append((
             v.terrain, f"{ours['success_rate']:.0%} vs {theirs['success_rate']:.0%}: {_mark(v.success)}",
             f"{_fmt(ours.get('time_to_goal_mean'), '.1f')} vs {_fmt(theirs.get('time_to_goal_mean'), '.1f')}: "
@@ -209,7 +209,8 @@ def verdict_table(table: Table, terrains: Sequence[str], learned: str) -> str:
             "**yes**" if v.beats else "no",
         ))
     beaten = sum(v.beats for v in calls)
-    overall = (f"**Overall: {'yes' if beaten == len(calls) else 'no'}**: `{learned}` beats the best fixed gait on "
+    what = "the best fixed gait" if baseline == "best_fixed" else f"`{baseline}`"
+    overall = (f"**Overall: {'yes' if beaten == len(calls) else 'no'}**: `{learned}` beats {what} on "
                f"{beaten} of {len(calls)} terrains.")
     header = ("terrain", "success", "time to goal (s)", "cost of transport", f"`{learned}` beats it")
     return _markdown_table(header, rows) + "\n\n" + overall
@@ -281,6 +282,9 @@ def verdict_section(table: Table, inputs: ReportInputs) -> str:
     ]
     for learned in (c for c in LEARNED if c in inputs.controllers):
         parts += [f"### `{learned}`", verdict_table(table, inputs.terrains, learned), adaptation_text(table, learned)]
+        if "reflex_gait" in inputs.controllers:
+            parts += ["Against `reflex_gait`, the fixed gait with the lift reflex moving its legs (adaptation by "
+                      "hand), on the same criteria:", verdict_table(table, inputs.terrains, learned, "reflex_gait")]
     return "\n\n".join(parts)
 
 

@@ -66,7 +66,7 @@ class Plan:
         """The grid on the training terrains, the learned and open-loop controllers on the suite; slow filmed or
         logged episodes first."""
         jobs = _grid_jobs(params, self.train, self.gaits)
-        for spec in [*self.learned, ControllerSpec("open_loop", gait=params.cpg.initial)]:
+        for spec in [*self.learned, *_reflex_gait(params), ControllerSpec("open_loop", gait=params.cpg.initial)]:
             jobs += _suite_jobs(params, self.suite, spec)
         jobs.sort(key=lambda j: (j.video is None, j.mcap is None))
         return jobs
@@ -77,7 +77,14 @@ class Plan:
     def episodes(self, params: Params) -> int:
         """Every episode of both phases (for the progress bar)."""
         grid = len(self.gaits) * len(self.train) * GRID_SEEDS
-        return grid + (len(self.learned) + 2) * len(self.suite) * params.eval.episodes  # + open_loop, best_fixed
+        controllers = len(self.learned) + len(_reflex_gait(params)) + 2  # + open_loop, best_fixed
+        return grid + controllers * len(self.suite) * params.eval.episodes
+
+
+def _reflex_gait(params: Params) -> list[ControllerSpec]:
+    """The `reflex_gait` baseline, when eval.reflex_gait names its gait."""
+    gait = params.eval.reflex_gait
+    return [] if gait is None else [ControllerSpec("reflex_gait", gait=gait, lift_reflex=True)]
 
 
 @dataclass(frozen=True)
@@ -280,7 +287,9 @@ def _report_inputs(params: Params, work: Plan, outcome: Outcome) -> ReportInputs
     return ReportInputs(
         command=command_line(params, work.extra_terrains), terrains=terrains, controllers=outcome.controllers,
         described={**work.described, "best_fixed": f"fixed gait {gait_label(gait)} (zero action)",
-                   "open_loop": f"fixed gait {gait_label(params.cpg.initial)} = cpg.initial (zero action)"},
+                   "open_loop": f"fixed gait {gait_label(params.cpg.initial)} = cpg.initial (zero action)",
+                   **({"reflex_gait": f"fixed gait {gait_label(cfg.reflex_gait)} with the lift reflex moving the legs "
+                                      "(task.lift_reflex)"} if cfg.reflex_gait else {})},
         params_summary={
             "episodes per terrain and controller": cfg.episodes, "seeds": f"{cfg.seed}..{cfg.seed + cfg.episodes - 1}",
             "goal": f"{params.task.goal_distance} m", "time limit": f"{params.task.time_limit} s",
