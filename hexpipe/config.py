@@ -594,13 +594,12 @@ class Params(_Section):
         gait, task = self.eval.reflex_gait, self.task
         if gait is None:
             return self
-        zone = task.lift_reflex_zone or task.lift_free_zone
-        if zone is None:
+        if task.lift_reflex_zone is None and task.lift_free_zone is None:
             raise ValueError("eval.reflex_gait walks with the lift reflex, which reads task.lift_reflex_zone or else "
                              "task.lift_free_zone; both are null: set one, e.g. [0.6, 0.7]")
-        if not reflex_zone(self.sensors, zone).any():
-            raise ValueError(f"eval.reflex_gait's lift reflex reads {list(zone)} m, which lies outside the height map "
-                             f"(sensors.heightmap_ahead {list(self.sensors.heightmap_ahead)})")
+        if not reflex_zone(self.sensors, task.lift_zone).any():
+            raise ValueError(f"eval.reflex_gait's lift reflex reads {list(task.lift_zone)} m, which lies outside the "
+                             f"height map (sensors.heightmap_ahead {list(self.sensors.heightmap_ahead)})")
         if not gait[1] < self.cpg.upper[1]:
             raise ValueError(f"eval.reflex_gait's b ({gait[1]}) must lie below cpg.upper's b ({self.cpg.upper[1]}), "
                              "the lift its reflex swings to; at or above it the reflex never lifts")
