@@ -7,7 +7,7 @@ as often.
         --fixed reports/experiments/head150/fixed_gaits.csv --arm elev150:0 --arm head150:1
 
 Each `--arm CONDITION:GAIN` pairs a condition's trials (their own evaluation, `result.json`) with the fixed gaits'
-episodes at that `sim.heading_gain` in the `--fixed` CSV (heading.py's, the same episodes: evaluate's seeds). The
+episodes at that `sim.heading_gain` in the `--fixed` CSVs (heading.py's, the same episodes: evaluate's seeds; repeat `--fixed` to pool several). The
 reflexes are part of the robot, so a policy is held against the gaits walking with the reflex it trained with.
 Prints, per arm, each draw's count of dominated terrains (of the CSV's terrains) and by which gaits, the mean over
 draws with a 95% bootstrap interval over seeds, and per terrain how many draws are dominated; with two arms, the
@@ -60,6 +60,11 @@ def dominated_by(policy: pd.Series, gaits: pd.DataFrame) -> list[str]:
     return list(gaits.index[beats])
 
 
+def read_fixed_all(paths: list[Path]) -> pd.DataFrame:
+    """Several heading.py CSVs of fixed gaits run on the same episodes and settings, pooled."""
+    return pd.concat([read_fixed(p) for p in paths], ignore_index=True)
+
+
 def read_fixed(path: Path) -> pd.DataFrame:
     """heading.py's CSV of the fixed gaits' episodes; one line, not a traceback, when it is unreadable or lacks the
     columns these readouts use."""
@@ -101,10 +106,11 @@ def arm_counts(reports: list[Path], condition: str, gain: float, fixed: pd.DataF
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("reports", type=Path, nargs="+", help="the sweeps' report folders (reports/sweeps/NAME)")
-    ap.add_argument("--fixed", type=Path, required=True, help="heading.py's CSV of the fixed gaits")
+    ap.add_argument("--fixed", type=Path, action="append", required=True,
+                    help="heading.py's CSV of fixed gaits (repeatable; their episodes are pooled)")
     ap.add_argument("--arm", dest="arms", action="append", required=True, metavar="CONDITION:GAIN")
     a = ap.parse_args()
-    fixed = read_fixed(a.fixed)
+    fixed = read_fixed_all(a.fixed)
     counts = {}
     for arm in a.arms:
         condition, _, gain = arm.partition(":")

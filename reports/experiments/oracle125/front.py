@@ -20,7 +20,7 @@ from pathlib import Path
 import pandas as pd
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "head150"))
-from dominance import dominated_by, label, outcomes, read_fixed  # head150/dominance.py
+from dominance import dominated_by, label, outcomes, read_fixed, read_fixed_all  # head150/dominance.py
 
 
 def high_gait(gait: str, ceiling: float) -> str:
@@ -36,7 +36,7 @@ def main() -> None:
                     help="heading.py's CSV of plain fixed gaits (repeatable; their episodes are pooled)")
     ap.add_argument("--ceiling", type=float, default=0.5, help="b's ceiling (rad): the high fixed gait's lift")
     a = ap.parse_args()
-    fixed = outcomes(pd.concat([read_fixed(p) for p in a.fixed]), "controller").rename(index=label, level="controller")
+    fixed = outcomes(read_fixed_all(a.fixed), "controller").rename(index=label, level="controller")
     pd.set_option("display.width", 200)
     for path in a.arms:
         mine = outcomes(read_fixed(path), "controller").rename(index=label, level="controller")
