@@ -7,8 +7,9 @@ as often.
         --fixed reports/experiments/head150/fixed_gaits.csv --arm elev150:0 --arm head150:1
 
 Each `--arm CONDITION:GAIN` pairs a condition's trials (their own evaluation, `result.json`) with the fixed gaits'
-episodes at that `sim.heading_gain` in the `--fixed` CSVs (heading.py's, the same episodes: evaluate's seeds; repeat `--fixed` to pool several). The
-reflexes are part of the robot, so a policy is held against the gaits walking with the reflex it trained with.
+episodes at that `sim.heading_gain` in the `--fixed` CSVs (heading.py's, the same episodes: evaluate's seeds;
+repeat `--fixed` to pool several). The reflexes are part of the robot, so a policy is held against the gaits
+walking with the reflex it trained with.
 Prints, per arm, each draw's count of dominated terrains (of the CSV's terrains) and by which gaits, the mean over
 draws with a 95% bootstrap interval over seeds, and per terrain how many draws are dominated; with two arms, the
 second minus the first over the seeds both have. Several report folders may be given: each arm's condition is
