@@ -3,9 +3,11 @@
 `load_params` is called once, by the CLI; everything below it receives the typed sections. Errors are
 `ConfigError` with one line naming the key at fault and what is allowed.
 
-The code defaults are params.yaml's but for the gait: here a and omega are free (the general CPG that the unit
-tests and library users get), while params.yaml pins them at the fixed gait's with the stride reflex and a teacher
-of 60 (cpg.*, task.lift_teacher, task.stride_reflex: the pipeline's default since `pinned_stride60`).
+The code defaults are params.yaml's but for the recipe: here the CPG is the general one and the robot bare (what
+the unit tests and library users get), while params.yaml holds the pipeline's recipe, `lift80_t150` since
+2026-12-07: a and omega pinned at 0.8 and 1.25 pi with b steered through its rate, both reflexes, a lift teacher of
+150 scaled by relief, the stride reflex, a power price of 0.4, the fall check at 0.04 m, one PPO candidate and the
+reflex gait in the evaluation (tests/test_cli.py's PIPELINE_ONLY lists every such key).
 """
 
 from __future__ import annotations

@@ -21,7 +21,8 @@ SMOKE = [
     "collect.episodes=3", "collect.max_seconds=3", "collect.workers=2",
     "vae.epochs=2", "vae.batch_size=32",
     "ppo.total_timesteps=256", "ppo.n_envs=2", "ppo.n_steps=64", "ppo.batch_size=64", "ppo.n_epochs=1",
-    "ppo.checkpoint_every=128", "ppo.validation_episodes=2",  # and the default ppo.candidates: best of 3
+    "ppo.checkpoint_every=128", "ppo.validation_episodes=2",
+    "ppo.candidates=3",  # best of 3 (the default is 1 since `lift80_t150`): the selection path end to end
     "task.time_limit=3.0",
     "eval.terrains=[single_block, extra_blocks]", "eval.episodes=1", "eval.log_episodes=1",
     "eval.grid_a=[0.25]", "eval.grid_b=[0.4]", "eval.grid_omega=[4.7]",
@@ -64,7 +65,7 @@ def test_dvc_repro_runs_all_stages_then_nothing_then_only_what_changed(tmp_path)
     assert "policy" in table["single_block"] and "open_loop" in table["single_block"]
     assert (repo / "reports/README.md").read_text().count("not run yet") == 0
     assert (repo / "reports/ppo/training_curve.png").is_file()
-    chosen = json.loads((repo / "reports/ppo/selection.json").read_text())  # best of the default 3 candidates
+    chosen = json.loads((repo / "reports/ppo/selection.json").read_text())  # best of 3 candidates
     assert sorted(chosen["candidates"]) == ["0", "1000", "2000"] and str(chosen["chosen_seed"]) in chosen["candidates"]
     summary = (repo / "reports/README.md").read_text()
     assert f"| {chosen['chosen_seed']} | " in summary and "| seed | validation return |" in summary

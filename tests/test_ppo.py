@@ -214,12 +214,12 @@ def test_a_policy_runs_only_under_the_action_order_it_was_trained_with(tmp_path)
     from hexpipe.rl.policy import PolicyError, load_policy
 
     blind = ("ppo.n_envs=1", "ppo.blind=true", "ppo.total_timesteps=64")
-    first = tiny(tmp_path, *blind, "cpg.action_order=1")
-    train_ppo(first, show_progress=False)
-    assert load_policy(tmp_path / "ppo", first).config["cpg"]["action_order"] == 1
-    assert load_policy(tmp_path / "ppo").params.cpg.action_order == 1  # run with its own settings: the trained order
-    with pytest.raises(PolicyError, match=r"trained with cpg\.action_order=1 \(its actions are the rates of a, b, "
-                                          r"omega\), params now have 2") as err:
+    second = tiny(tmp_path, *blind, "cpg.action_order=2")  # the paper's, not the pipeline's default (1)
+    train_ppo(second, show_progress=False)
+    assert load_policy(tmp_path / "ppo", second).config["cpg"]["action_order"] == 2
+    assert load_policy(tmp_path / "ppo").params.cpg.action_order == 2  # run with its own settings: the trained order
+    with pytest.raises(PolicyError, match=r"trained with cpg\.action_order=2 \(its actions are the second "
+                                          r"derivatives of a, b, omega\), params now have 1") as err:
         load_policy(tmp_path / "ppo", tiny(tmp_path, *blind))
     assert "\n" not in str(err.value)
 
@@ -232,7 +232,7 @@ def test_the_lift_price_ramps_in_through_every_training_env():
     from hexpipe.rl.callbacks import LiftCostRamp
     from hexpipe.rl.train import make_vec_env
 
-    params = load_params(ROOT / "params.yaml", ["task.lift_cost=10", "cpg.initial=[0.4,0.4,3.141593]",
+    params = load_params(ROOT / "params.yaml", ["task.lift_cost=10", "cpg.initial=[0.8,0.4,3.926991]",
                                                  "ppo.lift_cost_ramp=[0.25,0.75]", "ppo.total_timesteps=400"])
     venv = make_vec_env(params, ("flat",), 2, None, False, 0)
     try:
