@@ -66,7 +66,7 @@ def test_evaluate_writes_metrics_report_recordings_and_video(blind):
     terrains = {k: v for k, v in metrics.items() if isinstance(v, dict)}
     assert list(terrains) == ["single_block", "extra_blocks"]
     for row in terrains.values():
-        assert list(row) == ["policy", "blind", "best_fixed", "open_loop"]
+        assert list(row) == ["policy", "blind", "best_fixed", "reflex_gait", "open_loop"]  # default: reflex gait on
         for m in row.values():
             assert m["episodes"] == 2
             for key in ("success_rate", "fall_rate", "stuck_rate"):
@@ -81,7 +81,7 @@ def test_evaluate_writes_metrics_report_recordings_and_video(blind):
 
     rows = pd.read_csv(report / "results.csv")
     grid_rows = len(blind.ppo.train_terrains) * GRID_SEEDS  # the 1-gait grid, on every training terrain
-    assert len(rows) == 2 * 4 * 2 + grid_rows  # terrains x controllers x episodes, plus the grid
+    assert len(rows) == 2 * 5 * 2 + grid_rows  # terrains x controllers x episodes, plus the grid
     assert set(rows.loc[rows["controller"] == "grid", "terrain"]) == set(blind.ppo.train_terrains)
     evaluated = rows[rows["controller"] != "grid"]
     assert set(evaluated.groupby("controller")["seed"].apply(tuple)) == {(1000, 1001, 1000, 1001)}  # same seeds

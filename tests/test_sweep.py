@@ -145,7 +145,7 @@ def test_tiny_sweep_on_local_ray_records_a_failed_trial_and_goes_on(tmp_path, ra
     assert record["status"] == "ok" and record["seed"] == 1 and record["node"]
     assert record["selection"]["chosen_seed"] == 1 and record["selection"]["candidates"]["1"]["episodes"] == 2
     assert "ip=127.0.0.1" in failure["traceback"]  # the local cluster stays on loopback
-    assert {e["controller"] for e in record["episodes"]} == {"policy", "best_fixed", "open_loop"}
+    assert {e["controller"] for e in record["episodes"]} == {"policy", "best_fixed", "reflex_gait", "open_loop"}
     assert (tmp_path / "data" / "tiny" / "seeing-seed1" / "ppo" / "policy" / "model.zip").is_file()
     assert (out / "seeing-seed1" / "eval" / "metrics.json").is_file()
 
