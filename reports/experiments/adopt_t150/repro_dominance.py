@@ -19,20 +19,15 @@ from pathlib import Path
 import pandas as pd
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "head150"))
-from dominance import dominated_by, label, outcomes, read_fixed_all
+from dominance import dominated_by, label, outcomes, read_episodes, read_fixed_all
 
 SHOWN = 6  # gaits named per terrain; the rest are counted
 
 
 def read_results(path: Path, episodes: int) -> pd.DataFrame:
     """evaluate's results.csv, its first `episodes` episodes per terrain and controller, without the grid's rows."""
-    try:
-        results = pd.read_csv(path)
-    except (OSError, ValueError) as exc:
-        raise SystemExit(f"error: {path}: {exc}") from None
-    missing = {"terrain", "controller", "episode", "success", "time", "cost_of_transport"} - set(results.columns)
-    if missing:
-        raise SystemExit(f"error: {path} lacks the columns {sorted(missing)} (evaluate's results.csv has them)")
+    results = read_episodes(path, {"terrain", "controller", "episode", "success", "time", "cost_of_transport"},
+                            "evaluate's results.csv")
     return results[(results["controller"] != "grid") & (results["episode"] < episodes)]
 
 

@@ -66,17 +66,23 @@ def read_fixed_all(paths: list[Path]) -> pd.DataFrame:
     return pd.concat([read_fixed(p) for p in paths], ignore_index=True)
 
 
-def read_fixed(path: Path) -> pd.DataFrame:
-    """heading.py's CSV of the fixed gaits' episodes; one line, not a traceback, when it is unreadable or lacks the
-    columns these readouts use."""
+def read_episodes(path: Path, columns: set[str], made_by: str) -> pd.DataFrame:
+    """A CSV of episodes; one line, not a traceback, when it is unreadable or lacks the `columns` a readout uses
+    (`made_by` names what writes them)."""
     try:
-        fixed = pd.read_csv(path)
+        table = pd.read_csv(path)
     except (OSError, ValueError) as exc:
         raise SystemExit(f"error: {path}: {exc}") from None
-    missing = {"controller", "gain", "terrain", "success", "time", "cost_of_transport"} - set(fixed.columns)
+    missing = columns - set(table.columns)
     if missing:
-        raise SystemExit(f"error: {path} lacks the columns {sorted(missing)} (heading.py's --csv has them)")
-    return fixed
+        raise SystemExit(f"error: {path} lacks the columns {sorted(missing)} ({made_by} has them)")
+    return table
+
+
+def read_fixed(path: Path) -> pd.DataFrame:
+    """heading.py's CSV of the fixed gaits' episodes."""
+    return read_episodes(path, {"controller", "gain", "terrain", "success", "time", "cost_of_transport"},
+                         "heading.py's --csv")
 
 
 def policy_episodes(reports: list[Path], condition: str) -> pd.DataFrame:
