@@ -4,8 +4,8 @@
 `ConfigError` with one line naming the key at fault and what is allowed.
 
 The code defaults are params.yaml's but for the recipe: here the CPG is the general one and the robot bare (what
-the unit tests and library users get), while params.yaml holds the pipeline's recipe, `lift80_t150` since
-2026-12-07: a and omega pinned at 0.8 and 1.25 pi with b steered through its rate, both reflexes, a lift teacher of
+the unit tests and library users get), while params.yaml holds the pipeline's recipe, `pin138_t150` since
+2026-12-07: a and omega pinned at 0.8 and 1.375 pi with b steered through its rate, both reflexes, a lift teacher of
 150 scaled by relief, the stride reflex, a power price of 0.4, the fall check at 0.04 m, one PPO candidate and the
 reflex gait in the evaluation (tests/test_cli.py's PIPELINE_ONLY lists every such key).
 """

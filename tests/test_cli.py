@@ -22,16 +22,16 @@ def _flat(tree, prefix=""):
 
 
 # Where the pipeline's params.yaml departs from the code defaults, on purpose (hexpipe/config.py's docstring): the
-# `lift80_t150` recipe since 2026-12-07 (a and omega pinned at 0.8 and 1.25 pi, b steered through its rate, both
+# `pin138_t150` recipe since 2026-12-07 (a and omega pinned at 0.8 and 1.375 pi, b steered through its rate, both
 # reflexes, a teacher of 150 scaled by relief, the stride reflex, a power price of 0.4, the fall check at 0.04 m, one
 # PPO candidate, the reflex gait in the evaluation), while the code keeps the general CPG and a bare robot for the
 # unit tests and library users. Keys are flattened; a value may be a subtree.
-PIPELINE_ONLY = {"cpg.initial.0": 0.8, "cpg.initial.2": 1.25 * math.pi, "cpg.lower.0": 0.8,
-                 "cpg.lower.2": 1.25 * math.pi, "cpg.upper.0": 0.8, "cpg.upper.2": 1.25 * math.pi,
+PIPELINE_ONLY = {"cpg.initial.0": 0.8, "cpg.initial.2": 1.375 * math.pi, "cpg.lower.0": 0.8,
+                 "cpg.lower.2": 1.375 * math.pi, "cpg.upper.0": 0.8, "cpg.upper.2": 1.375 * math.pi,
                  "cpg.action_order": 1, "sim.elevator_gain": 2.5, "sim.heading_gain": 1.0, "task.fall_height": 0.04,
                  "task.lift_reflex_zone": (0.6, 1.05), "task.lift_reflex_relief": 0.1, "task.lift_teacher": 150.0,
                  "task.stride_reflex": 0.35, "task.power_cost": 0.4, "ppo.candidates": 1,
-                 "ppo.validation_episodes": 0, "eval.reflex_gait": (0.8, 0.2, 1.25 * math.pi)}
+                 "ppo.validation_episodes": 0, "eval.reflex_gait": (0.8, 0.2, 1.375 * math.pi)}
 
 
 def test_params_yaml_matches_the_code_defaults():
@@ -61,7 +61,7 @@ def test_overrides_are_typed_and_nested():
         ("ppo.foo=1", "unknown key 'ppo.foo'; allowed here: batch_size"),
         ("ppo.n_envs=zero", "ppo.n_envs"),
         ("ppo.n_envs=0", "greater than or equal to 1"),
-        ("cpg.initial=[0.8, 0.9, 3.926991]", "b: need 0 < lower"),
+        ("cpg.initial=[0.8, 0.9, 4.319690]", "b: need 0 < lower"),
         ("cpg.fall_rate_limit=[1.0, 0.0, 10.0]", "fall_rate_limit must be positive"),
         ("sim.control_hz=7", "control_hz=7 must divide physics_hz=120"),
         ("task.sensors=[lidar]", "task.sensors[0]"),

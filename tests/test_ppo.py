@@ -232,7 +232,7 @@ def test_the_lift_price_ramps_in_through_every_training_env():
     from hexpipe.rl.callbacks import LiftCostRamp
     from hexpipe.rl.train import make_vec_env
 
-    params = load_params(ROOT / "params.yaml", ["task.lift_cost=10", "cpg.initial=[0.8,0.4,3.926991]",
+    params = load_params(ROOT / "params.yaml", ["task.lift_cost=10", "cpg.initial=[0.8,0.4,4.319690]",
                                                  "ppo.lift_cost_ramp=[0.25,0.75]", "ppo.total_timesteps=400"])
     venv = make_vec_env(params, ("flat",), 2, None, False, 0)
     try:
