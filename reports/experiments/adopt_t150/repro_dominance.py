@@ -19,7 +19,7 @@ from pathlib import Path
 import pandas as pd
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "head150"))
-from dominance import dominated_by, label, outcomes, read_episodes, read_fixed_all
+from dominance import dominated_by, gait_outcomes, outcomes, read_episodes, read_fixed_all
 
 SHOWN = 6  # gaits named per terrain; the rest are counted
 
@@ -39,14 +39,10 @@ def main() -> None:
     ap.add_argument("--gain", type=float, default=1.0, help="the fixed gaits' sim.heading_gain to read (default 1)")
     ap.add_argument("--episodes", type=int, default=10, help="episodes per terrain read from results (default 10)")
     a = ap.parse_args()
-    gaits = read_fixed_all(a.fixed)
-    gaits = gaits[gaits["gain"] == a.gain]
-    if gaits.empty:
-        raise SystemExit(f"error: the fixed gaits' CSVs have no episodes at gain {a.gain:g}")
-    gait_table = outcomes(gaits, "controller").rename(index=label, level="controller")
-    n_gaits = gaits["controller"].nunique()
+    gait_table = gait_outcomes(read_fixed_all(a.fixed), a.gain)
+    n_gaits = gait_table.index.get_level_values("controller").nunique()
     mine = outcomes(read_results(a.results, a.episodes), "controller")
-    terrains = sorted(set(gaits["terrain"]) & set(mine.index.get_level_values("terrain")))
+    terrains = sorted(set(gait_table.index.get_level_values("terrain")) & set(mine.index.get_level_values("terrain")))
     for controller in mine.index.get_level_values("controller").unique():
         hits = {t: dominated_by(mine.loc[(controller, t)], gait_table.xs(t, level="terrain"))
                 for t in terrains if (controller, t) in mine.index}

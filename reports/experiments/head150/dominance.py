@@ -85,6 +85,14 @@ def read_fixed(path: Path) -> pd.DataFrame:
                          "heading.py's --csv")
 
 
+def gait_outcomes(fixed: pd.DataFrame, gain: float) -> pd.DataFrame:
+    """`outcomes` of the fixed gaits walked at heading gain `gain`, indexed by short gait name and terrain."""
+    gaits = fixed[fixed["gain"] == gain]
+    if gaits.empty:
+        raise SystemExit(f"error: the fixed gaits' CSVs have no episodes at gain {gain:g}")
+    return outcomes(gaits, "controller").rename(index=label, level="controller")
+
+
 def policy_episodes(reports: list[Path], condition: str) -> pd.DataFrame:
     rows = [{**ep, "seed": record["seed"]} for record in load_records(reports, condition)
             for ep in record["episodes"] if ep["controller"] == "policy"]
@@ -95,11 +103,8 @@ def policy_episodes(reports: list[Path], condition: str) -> pd.DataFrame:
 
 def arm_counts(reports: list[Path], condition: str, gain: float, fixed: pd.DataFrame) -> pd.DataFrame:
     """One row per draw (seed): the number of terrains on which some gait dominates it, and the gaits that do."""
-    gaits = fixed[fixed["gain"] == gain]
-    if gaits.empty:
-        raise SystemExit(f"error: the fixed gaits' CSV has no episodes at gain {gain:g}")
-    gait_table = outcomes(gaits, "controller").rename(index=label, level="controller")
-    terrains = sorted(gaits["terrain"].unique())
+    gait_table = gait_outcomes(fixed, gain)
+    terrains = sorted(gait_table.index.get_level_values("terrain").unique())
     mine = outcomes(policy_episodes(reports, condition), "seed")
     rows = []
     for seed in sorted(mine.index.get_level_values("seed").unique()):
