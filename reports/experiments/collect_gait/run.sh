@@ -13,3 +13,4 @@ run() {  # name, extra collect sets...
 run A --set "collect.cpg_lower=[0.4,0.2,3.141593]" --set "collect.cpg_upper=[0.8,0.5,4.712389]" --set collect.action_order=2
 run B --set "collect.cpg_lower=[0.4,0.2,3.141593]" --set "collect.cpg_upper=[0.4,0.5,3.926991]" --set collect.action_order=2
 run D --set collect.episodes=200
+run E --set "collect.cpg_lower=[0.4,0.2,3.141593]" --set "collect.cpg_upper=[0.4,0.5,3.926991]" --set collect.action_order=2 --set collect.episodes=200
