@@ -54,9 +54,16 @@ def dataset_signature(params: Params) -> str:
     return params_hash(params, collect={"workers", "episodes", "out_dir"})
 
 
+def random_gait_params(params: Params) -> Params:
+    """The params the random gait walks under: cpg with collect's own bounds and action order, where set."""
+    gait = params.collect.gait(params.cpg)
+    return params if gait is params.cpg else params.model_copy(update={"cpg": gait})
+
+
 def make_env(params: Params, terrain: str) -> HexapodEnv:
-    """A bare env (no observation sensors): the logger reads the sensors on the steps it keeps only."""
-    return HexapodEnv.from_params(params, terrain, obs_sensors=())
+    """A bare env (no observation sensors) walking the random gait's CPG; the logger reads the sensors on the steps
+    it keeps only."""
+    return HexapodEnv.from_params(random_gait_params(params), terrain, obs_sensors=())
 
 
 def _rollout(params: Params, plan: EpisodePlan, env: HexapodEnv, log: Any) -> tuple[dict[str, Any], float]:
@@ -90,7 +97,8 @@ def run_episode(params: Params, plan: EpisodePlan, out_dir: Path) -> dict[str, A
     env = make_env(params, plan.terrain)
     env.reset(seed=plan.seed)
     start = time.perf_counter()
-    metadata = episode_metadata(env, plan.seed, params.model_dump_json(), index=plan.index, policy="random")
+    metadata = episode_metadata(env, plan.seed, random_gait_params(params).model_dump_json(), index=plan.index,
+                                policy="random")
     with EpisodeLog(env, out_dir / plan.file, metadata, log_every=params.collect.log_every) as log:
         info, env_seconds = _rollout(params, plan, env, log)
     seconds = time.perf_counter() - start

@@ -357,7 +357,35 @@ class CollectConfig(_Section):
     workers: Workers = 2
     seed: int = 0
     action_scale: Fraction = 0.7  # random second-derivative actions drawn uniformly in +-action_scale
+    # the random gait's own CPG bounds [a, b, omega] and action order (null: cpg's). A policy's bounds may pin a fast
+    # stride, which reaches the goal in few frames; the data the VAE learns the terrain from should also walk slowly
+    # and short, so that it sees each layout from many places (reports/experiments, `collect_gait`)
+    cpg_lower: Triple | None = None
+    cpg_upper: Triple | None = None
+    action_order: Literal[1, 2] | None = None
     out_dir: str = "data/rollouts"
+
+    @model_validator(mode="after")
+    def _gait_bounds(self) -> CollectConfig:
+        if (self.cpg_lower is None) != (self.cpg_upper is None):
+            raise ValueError("collect.cpg_lower and collect.cpg_upper go together: set both or neither")
+        if self.cpg_lower is not None and self.cpg_upper is not None:
+            for name, lo, hi in zip(("a", "b", "omega"), self.cpg_lower, self.cpg_upper, strict=True):
+                if not 0 < lo <= hi:
+                    raise ValueError(f"collect.cpg_lower/cpg_upper {name}: need 0 < lower ({lo}) <= upper ({hi})")
+        return self
+
+    def gait(self, cpg: CpgConfig) -> CpgConfig:
+        """The CPG the random gait walks: `cpg` with these bounds and action order where set, its initial
+        parameters clipped into them."""
+        update: dict[str, object] = {}
+        if self.cpg_lower is not None and self.cpg_upper is not None:
+            initial = tuple(min(max(x, lo), hi) for x, lo, hi in zip(cpg.initial, self.cpg_lower, self.cpg_upper,
+                                                                      strict=True))
+            update.update(lower=tuple(self.cpg_lower), upper=tuple(self.cpg_upper), initial=initial)
+        if self.action_order is not None:
+            update["action_order"] = self.action_order
+        return CpgConfig.model_validate({**cpg.model_dump(), **update}) if update else cpg
 
 
 class VaeConfig(_Section):

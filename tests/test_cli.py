@@ -73,12 +73,22 @@ def test_overrides_are_typed_and_nested():
         ("eval.reflex_gait=[0.4, 0.5, 3.141593]", "eval.reflex_gait's b (0.5) must lie below cpg.upper's b"),
         ("eval.reflex_gait=[0.4, 0.2]", "eval.reflex_gait"),
         ("task.failure_penalty=-5", "task.failure_penalty"),
+        ("collect.cpg_lower=[0.4, 0.2, 3.141593]", "collect.cpg_lower and collect.cpg_upper go together"),
+        ("collect.action_order=3", "collect.action_order"),
     ],
 )
 def test_bad_overrides_name_the_key(override, expected):
     with pytest.raises(ConfigError, match=None) as err:
         load_params(ROOT / "params.yaml", [override])
     assert expected in str(err.value) and "\n" not in str(err.value)
+
+
+def test_collect_gait_bounds_must_be_ordered():
+    with pytest.raises(ConfigError) as err:
+        load_params(ROOT / "params.yaml", ["collect.cpg_lower=[0.4, 0.2, 3.141593]",
+                                           "collect.cpg_upper=[0.3, 0.5, 3.141593]"])
+    assert "collect.cpg_lower/cpg_upper a: need 0 < lower (0.4) <= upper (0.3)" in str(err.value)
+    assert "\n" not in str(err.value)
 
 
 def test_cli_reports_bad_input_in_one_line(tmp_path):

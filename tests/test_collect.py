@@ -5,12 +5,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from mcap.reader import make_reader
 from orphans import kill_and_list_survivors
 
 from hexpipe.collect import MANIFEST, collect, plan_episodes, run_episode
 from hexpipe.config import Params, load_params
 from hexpipe.envs.hexapod import HexapodEnv
-from hexpipe.recording.reader import count_messages, iter_frames, read_metadata
+from hexpipe.recording.reader import JsonDecoderFactory, count_messages, iter_frames, read_metadata
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -51,7 +52,7 @@ def test_logged_sensors_equal_what_the_env_sensed(tmp_path):
     row = run_episode(params, plan, Path(params.collect.out_dir))
     frames = list(iter_frames(Path(params.collect.out_dir) / row["file"]))
     # replay the same episode (same seed, same random actions) and sense at the end
-    env = HexapodEnv(plan.terrain, sim=params.sim, cpg=params.cpg, sensors=params.sensors,
+    env = HexapodEnv(plan.terrain, sim=params.sim, cpg=params.collect.gait(params.cpg), sensors=params.sensors,
                      task=params.task.model_copy(update={"sensors": ()}))
     env.reset(seed=plan.seed)
     rng = np.random.default_rng(plan.seed)
@@ -61,6 +62,31 @@ def test_logged_sensors_equal_what_the_env_sensed(tmp_path):
     assert np.array_equal(frames[-1].sensors["rgb"], sensed["rgb"])
     assert np.array_equal(frames[-1].sensors["heightmap"], sensed["heightmap"])
     env.close()
+
+
+def test_random_gait_walks_collects_own_cpg_bounds(tmp_path):
+    """collect.cpg_lower/upper and action_order replace the policy's CPG for the random gait only: a pinned stride
+    (cpg.lower == cpg.upper for a) is free to wander in collect's bounds, and the logged params say so."""
+    params = load_params(ROOT / "params.yaml", ["cpg.lower=[0.8, 0.2, 4.319690]", "cpg.upper=[0.8, 0.5, 4.319690]",
+                                                "cpg.initial=[0.8, 0.2, 4.319690]", "cpg.action_order=1"])
+    lower, upper = (0.4, 0.2, 3.141593), (0.6, 0.5, 4.712389)
+    own = params.collect.model_copy(update={"episodes": 1, "max_seconds": 3.0, "log_every": 1,
+                                            "out_dir": str(tmp_path / "rollouts"), "cpg_lower": lower,
+                                            "cpg_upper": upper, "action_order": 2})
+    params = params.model_copy(update={"collect": own})
+    gait = params.collect.gait(params.cpg)
+    assert gait.lower == lower and gait.upper == upper and gait.action_order == 2
+    assert gait.initial == (0.6, 0.2, 4.319690)  # the policy's initial a (0.8) clipped into collect's bounds
+    assert params.cpg.lower[0] == params.cpg.upper[0] == 0.8  # the policy's own bounds are untouched
+    plan = plan_episodes(params)[0]
+    row = run_episode(params, plan, Path(params.collect.out_dir))
+    path = Path(params.collect.out_dir) / row["file"]
+    with path.open("rb") as f:
+        reader = make_reader(f, decoder_factories=[JsonDecoderFactory()])
+        a = np.array([m.decoded_message["a"] for m in reader.iter_decoded_messages(topics=["/cpg"])])
+    assert np.all((a >= lower[0] - 1e-9) & (a <= upper[0] + 1e-9)) and np.ptp(a) > 0.01
+    logged = json.loads(read_metadata(path)["params"]["json"])["cpg"]
+    assert logged["lower"] == list(lower) and logged["action_order"] == 2
 
 
 def test_plan_is_deterministic_and_follows_the_mix(tmp_path):
