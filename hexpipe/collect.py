@@ -61,9 +61,8 @@ def random_gait_params(params: Params) -> Params:
 
 
 def make_env(params: Params, terrain: str) -> HexapodEnv:
-    """A bare env (no observation sensors) walking the random gait's CPG; the logger reads the sensors on the steps
-    it keeps only."""
-    return HexapodEnv.from_params(random_gait_params(params), terrain, obs_sensors=())
+    """A bare env (no observation sensors): the logger reads the sensors on the steps it keeps only."""
+    return HexapodEnv.from_params(params, terrain, obs_sensors=())
 
 
 def _rollout(params: Params, plan: EpisodePlan, env: HexapodEnv, log: Any) -> tuple[dict[str, Any], float]:
@@ -94,11 +93,11 @@ def run_episode(params: Params, plan: EpisodePlan, out_dir: Path) -> dict[str, A
     """
     from hexpipe.recording.episode import EpisodeLog, episode_metadata
 
-    env = make_env(params, plan.terrain)
+    walked = random_gait_params(params)  # the params the episode runs under, and logs
+    env = make_env(walked, plan.terrain)
     env.reset(seed=plan.seed)
     start = time.perf_counter()
-    metadata = episode_metadata(env, plan.seed, random_gait_params(params).model_dump_json(), index=plan.index,
-                                policy="random")
+    metadata = episode_metadata(env, plan.seed, walked.model_dump_json(), index=plan.index, policy="random")
     with EpisodeLog(env, out_dir / plan.file, metadata, log_every=params.collect.log_every) as log:
         info, env_seconds = _rollout(params, plan, env, log)
     seconds = time.perf_counter() - start
