@@ -226,8 +226,7 @@ class TaskConfig(_Section):
     # itself, which joint power barely charges on this robot (reports/experiments/README.md, "select"); 0 = off.
     # 30, ramped in by ppo.lift_cost_ramp and waived by lift_free_zone: over the pipeline's encoder, PPO seeds 0-6
     # met 8 of issue 10's 9 targets against 3 for a price of 10, seeds 0-9 only 5 (reports/experiments/README.md,
-    # "zone_pipe"): the seed's draw decides much, hence ppo.candidates. params.yaml's pipeline takes 90: with the lift
-    # learned alone at a 0.8, 1.375 pi it lowers the terrains a fixed gait beats it on ("price90_p138", "cand3_p90")
+    # "zone_pipe"): the seed's draw decides much, hence ppo.candidates
     lift_cost: Annotated[float, Field(ge=0)] = 30.0
     # [behind, ahead] (m): the lift price is waived while the terrain from `behind` m behind the body to `ahead` m
     # ahead of it rises or falls by more than 3 cm, so lifting costs only on level ground (null: charged everywhere).

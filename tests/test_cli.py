@@ -30,8 +30,8 @@ PIPELINE_ONLY = {"cpg.initial.0": 0.8, "cpg.initial.2": 1.375 * math.pi, "cpg.lo
                  "cpg.lower.2": 1.375 * math.pi, "cpg.upper.0": 0.8, "cpg.upper.2": 1.375 * math.pi,
                  "cpg.action_order": 1, "sim.elevator_gain": 2.5, "sim.heading_gain": 1.0, "task.fall_height": 0.04,
                  "task.lift_reflex_zone": (0.6, 1.05), "task.lift_reflex_relief": 0.1, "task.lift_teacher": 150.0,
-                 "task.stride_reflex": 0.35, "task.power_cost": 0.4, "task.lift_cost": 90.0,
-                 "eval.reflex_gait": (0.8, 0.2, 1.375 * math.pi)}
+                 "task.stride_reflex": 0.35, "task.power_cost": 0.4, "ppo.candidates": 1,
+                 "ppo.validation_episodes": 0, "eval.reflex_gait": (0.8, 0.2, 1.375 * math.pi)}
 
 
 def test_params_yaml_matches_the_code_defaults():
