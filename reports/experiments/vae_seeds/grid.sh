@@ -4,6 +4,7 @@
 # setting and seed into OUT/<name>-s<seed>; then prints each one's probes and their mean over the seeds.
 # About 70 s per 30 epochs on 2 cores; the pipeline's own encoder is not touched.
 # Usage: bash reports/experiments/vae_seeds/grid.sh [OUT]   (OUT defaults to /tmp/vae_seeds)
+#        SEEDS="0 1 2 3 4 5" SPECS="fw1 fw8" bash reports/experiments/vae_seeds/grid.sh OUT   (other seeds, some settings)
 set -euo pipefail
 out=${1:-/tmp/vae_seeds}
 mkdir -p "$out"
@@ -14,7 +15,12 @@ specs=(
   "fw4b01:vae.feature_weight=4.0 vae.epochs=30 vae.beta=0.1"
   "fw8e60:vae.feature_weight=8.0 vae.epochs=60"
 )
-seeds=(0 1 2)
+seeds=(${SEEDS:-0 1 2})
+if [ -n "${SPECS:-}" ]; then
+  kept=()
+  for spec in "${specs[@]}"; do [[ " $SPECS " == *" ${spec%%:*} "* ]] && kept+=("$spec"); done
+  specs=("${kept[@]}")
+fi
 for spec in "${specs[@]}"; do
   name=${spec%%:*}
   for seed in "${seeds[@]}"; do
@@ -26,14 +32,15 @@ for spec in "${specs[@]}"; do
       || { echo "error: $name seed $seed: train-vae failed (its output: $out/$name-s$seed.log)" >&2; exit 1; }
   done
 done
-.venv/bin/python - "$out" "${#seeds[@]}" "${specs[@]}" <<'PY'
+.venv/bin/python - "$out" "${seeds[*]}" "${specs[@]}" <<'PY'
 import json, sys
-out, n, specs = sys.argv[1], int(sys.argv[2]), sys.argv[3:]
+out, seeds, specs = sys.argv[1], [int(s) for s in sys.argv[2].split()], sys.argv[3:]
+n = len(seeds)
 print("setting | seed | distance R² | height R² | distance kNN | height kNN | val recon")
 for spec in specs:
     name, sets = spec.split(":", 1)
     rows = []
-    for seed in range(n):
+    for seed in seeds:
         m = json.load(open(f"{out}/{name}-s{seed}-report/metrics.json"))
         p = m["probe"]
         rows.append((p["rise_distance_r2"], p["rise_height_r2"], p["rise_distance_knn_r2"], p["rise_height_knn_r2"],
